@@ -1,0 +1,2 @@
+//! The offline half of rrf: scene import, the reference path tracer and network training.
+//! No Vulkan here.

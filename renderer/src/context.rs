@@ -1,0 +1,380 @@
+//! The Vulkan instance, device, queue and memory allocator, and their orderly teardown.
+
+use std::ffi::{c_char, CStr};
+use std::mem::ManuallyDrop;
+use std::sync::Mutex;
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
+use gpu_allocator::AllocatorDebugSettings;
+
+use crate::device_info::DeviceInfo;
+use crate::error::{Error, Result, VkContext};
+use crate::validation::{messenger_info, Validation, ValidationLog};
+
+/// The Vulkan API version rrf is written against; shaders target SPIR-V 1.5 to match.
+pub const API_VERSION: u32 = vk::API_VERSION_1_2;
+
+const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
+
+/// How to create a [`Context`].
+#[derive(Clone, Debug)]
+pub struct ContextOptions {
+    pub validation: Validation,
+    /// Case-insensitive substring of the device name to use instead of the preferred device.
+    pub device: Option<String>,
+    /// Extra instance extensions (for example for a window surface).
+    pub instance_extensions: Vec<&'static CStr>,
+    /// Extra device extensions (for example the swapchain).
+    pub device_extensions: Vec<&'static CStr>,
+}
+
+impl ContextOptions {
+    /// Options from the environment: `RRF_VALIDATION` and `RRF_DEVICE`.
+    pub fn from_env() -> Self {
+        Self {
+            validation: Validation::from_env(),
+            device: std::env::var("RRF_DEVICE").ok().filter(|s| !s.is_empty()),
+            instance_extensions: Vec::new(),
+            device_extensions: Vec::new(),
+        }
+    }
+}
+
+/// What [`Context::finish`] found while tearing down.
+#[derive(Debug, Default)]
+pub struct TeardownReport {
+    /// Validation warnings and errors over the whole life of the context, teardown included.
+    pub validation_messages: u32,
+    /// Names of GPU allocations that were still alive at teardown.
+    pub leaked: Vec<String>,
+}
+
+impl TeardownReport {
+    pub fn is_clean(&self) -> bool {
+        self.validation_messages == 0 && self.leaked.is_empty()
+    }
+}
+
+/// One Vulkan device with one queue that does graphics, compute and transfer.
+pub struct Context {
+    _entry: ash::Entry,
+    pub instance: ash::Instance,
+    pub physical_device: vk::PhysicalDevice,
+    pub device: ash::Device,
+    pub queue: vk::Queue,
+    pub queue_family: u32,
+    pub info: DeviceInfo,
+    debug: Option<Debug>,
+    command_pool: vk::CommandPool,
+    allocator: ManuallyDrop<Mutex<Allocator>>,
+    /// Boxed so that the messenger callback's pointer stays valid when the context moves.
+    validation: Box<ValidationLog>,
+    torn_down: bool,
+}
+
+struct Debug {
+    instance: ash::ext::debug_utils::Instance,
+    device: ash::ext::debug_utils::Device,
+    messenger: vk::DebugUtilsMessengerEXT,
+}
+
+impl Context {
+    pub fn new(options: &ContextOptions) -> Result<Self> {
+        // SAFETY: loading the Vulkan loader runs its initialisation code; nothing else is
+        // running Vulkan in this process yet.
+        let entry = unsafe { ash::Entry::load() }.map_err(|e| Error::LoaderMissing(e.to_string()))?;
+        let validation = Box::new(ValidationLog::default());
+
+        // SAFETY: plain enumeration queries on a loaded entry.
+        let layers = unsafe { entry.enumerate_instance_layer_properties() }.vk("vkEnumerateInstanceLayerProperties")?;
+        let has_layer = layers.iter().any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER));
+        let use_validation = match options.validation {
+            Validation::Off => false,
+            Validation::IfAvailable if !has_layer => {
+                eprintln!(
+                    "warning: the Vulkan validation layer is not installed, running without it \
+                     (Debian/Ubuntu: apt-get install vulkan-validationlayers)"
+                );
+                false
+            }
+            Validation::IfAvailable => true,
+            Validation::Required if !has_layer => return Err(Error::ValidationLayerMissing),
+            Validation::Required => true,
+        };
+
+        let mut available = unsafe { entry.enumerate_instance_extension_properties(None) }
+            .vk("vkEnumerateInstanceExtensionProperties")?;
+        if use_validation {
+            available.extend(
+                unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
+                    .vk("vkEnumerateInstanceExtensionProperties")?,
+            );
+        }
+        let has_debug_utils = available.iter().any(|e| e.extension_name_as_c_str() == Ok(ash::ext::debug_utils::NAME));
+
+        let mut extensions: Vec<*const c_char> = options.instance_extensions.iter().map(|e| e.as_ptr()).collect();
+        if has_debug_utils {
+            extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        let layer_names = if use_validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
+        let app = vk::ApplicationInfo::default().application_name(c"rrf").engine_name(c"rrf").api_version(API_VERSION);
+        // Chained into instance creation so that messages from vkCreateInstance and
+        // vkDestroyInstance are counted too.
+        let mut instance_messenger = messenger_info(&validation);
+        let mut instance_info = vk::InstanceCreateInfo::default()
+            .application_info(&app)
+            .enabled_layer_names(&layer_names)
+            .enabled_extension_names(&extensions);
+        if has_debug_utils {
+            instance_info = instance_info.push_next(&mut instance_messenger);
+        }
+        // SAFETY: every pointer in the create info outlives the call.
+        let instance = unsafe { entry.create_instance(&instance_info, None) }.map_err(|result| match result {
+            vk::Result::ERROR_INCOMPATIBLE_DRIVER => Error::NoDevice,
+            result => Error::Vulkan { call: "vkCreateInstance", result },
+        })?;
+
+        let debug_instance = has_debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &instance));
+        let messenger = match &debug_instance {
+            // SAFETY: the callback's user data (the boxed log) outlives the messenger.
+            Some(d) => Some(
+                unsafe { d.create_debug_utils_messenger(&messenger_info(&validation), None) }
+                    .vk("vkCreateDebugUtilsMessengerEXT")?,
+            ),
+            None => None,
+        };
+
+        let selected = select_device(&instance, options.device.as_deref());
+        let (physical_device, queue_family) = match selected {
+            Ok(found) => found,
+            Err(e) => {
+                // SAFETY: nothing was created from the instance but the messenger.
+                unsafe {
+                    if let (Some(d), Some(m)) = (&debug_instance, messenger) {
+                        d.destroy_debug_utils_messenger(m, None);
+                    }
+                    instance.destroy_instance(None);
+                }
+                return Err(e);
+            }
+        };
+        let info = DeviceInfo::query(&instance, physical_device, use_validation);
+
+        let device_extensions: Vec<*const c_char> = options.device_extensions.iter().map(|e| e.as_ptr()).collect();
+        let priorities = [1.0];
+        let queues =
+            [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
+        let device_info =
+            vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&device_extensions);
+        // SAFETY: the physical device came from this instance; the create info outlives the call.
+        let device = unsafe { instance.create_device(physical_device, &device_info, None) }.vk("vkCreateDevice")?;
+        let queue = unsafe { device.get_device_queue(queue_family, 0) };
+
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+
+        // Leaks are reported by name in `finish`, not logged by the allocator.
+        let mut debug_settings = AllocatorDebugSettings::default();
+        debug_settings.log_leaks_on_shutdown = false;
+        let allocator = Allocator::new(&AllocatorCreateDesc {
+            instance: instance.clone(),
+            device: device.clone(),
+            physical_device,
+            debug_settings,
+            buffer_device_address: false,
+            allocation_sizes: Default::default(),
+        })
+        .map_err(|source| Error::Allocation { name: "allocator".into(), source })?;
+
+        let debug = match (debug_instance, messenger) {
+            (Some(instance_fns), Some(messenger)) => Some(Debug {
+                device: ash::ext::debug_utils::Device::new(&instance, &device),
+                instance: instance_fns,
+                messenger,
+            }),
+            _ => None,
+        };
+
+        let context = Self {
+            _entry: entry,
+            instance,
+            physical_device,
+            device,
+            queue,
+            queue_family,
+            info,
+            debug,
+            command_pool,
+            allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            validation,
+            torn_down: false,
+        };
+        context.set_name(context.queue, "main queue");
+        context.set_name(context.command_pool, "one-shot command pool");
+        Ok(context)
+    }
+
+    /// Validation warnings and errors reported so far.
+    pub fn validation_messages(&self) -> u32 {
+        self.validation.count()
+    }
+
+    /// The validation log, for tests that want to print what went wrong.
+    pub fn validation_log(&self) -> &ValidationLog {
+        &self.validation
+    }
+
+    pub(crate) fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
+        // A panic while holding the lock leaves the allocator itself consistent.
+        self.allocator.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    }
+
+    /// Names a Vulkan object so that validation messages and GPU debuggers show it.
+    pub fn set_name<H: vk::Handle>(&self, handle: H, name: &str) {
+        let Some(debug) = &self.debug else { return };
+        let Ok(name) = std::ffi::CString::new(name) else { return };
+        let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
+        // SAFETY: the handle belongs to this device. Naming is best effort.
+        let _ = unsafe { debug.device.set_debug_utils_object_name(&info) };
+    }
+
+    /// Records commands with `record`, submits them and waits for them to finish.
+    pub fn submit_once<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> Result<R> {
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.command_pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: the pool belongs to this device and is used from one thread at a time.
+        let cmd = unsafe { self.device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
+        let result = (|| {
+            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            unsafe { self.device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
+            let value = record(cmd);
+            unsafe { self.device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+            let fence =
+                unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
+            let cmds = [cmd];
+            let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+            let waited = unsafe { self.device.queue_submit(self.queue, &submit, fence) }
+                .vk("vkQueueSubmit")
+                .and_then(|()| unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
+            unsafe { self.device.destroy_fence(fence, None) };
+            waited.map(|()| value)
+        })();
+        unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
+        result
+    }
+
+    /// Tears everything down in order and reports what was left alive and what the validation
+    /// layer said over the context's whole life.
+    pub fn finish(mut self) -> TeardownReport {
+        self.teardown()
+    }
+
+    fn teardown(&mut self) -> TeardownReport {
+        if self.torn_down {
+            return TeardownReport::default();
+        }
+        self.torn_down = true;
+        // SAFETY: this is the last use of the device; every handle destroyed here was created
+        // by this context and is destroyed exactly once, children before parents.
+        unsafe {
+            let _ = self.device.device_wait_idle();
+            let leaked = self.allocator().generate_report().allocations.into_iter().map(|a| a.name).collect();
+            ManuallyDrop::drop(&mut self.allocator);
+            self.device.destroy_command_pool(self.command_pool, None);
+            self.device.destroy_device(None);
+            if let Some(debug) = self.debug.take() {
+                debug.instance.destroy_debug_utils_messenger(debug.messenger, None);
+            }
+            self.instance.destroy_instance(None);
+            TeardownReport { validation_messages: self.validation.count(), leaked }
+        }
+    }
+}
+
+impl Drop for Context {
+    fn drop(&mut self) {
+        let report = self.teardown();
+        for name in &report.leaked {
+            eprintln!("error: GPU resource {name:?} was still alive when the Vulkan context was destroyed");
+        }
+    }
+}
+
+/// Picks the device: the one whose name contains `wanted`, or else the preferred kind
+/// (discrete, then integrated, virtual, CPU). Returns it with its universal queue family.
+fn select_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::PhysicalDevice, u32)> {
+    // SAFETY: enumeration and property queries on a live instance.
+    let devices = unsafe { instance.enumerate_physical_devices() }.vk("vkEnumeratePhysicalDevices")?;
+    if devices.is_empty() {
+        return Err(Error::NoDevice);
+    }
+    let named: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties)> =
+        devices.iter().map(|&d| (d, unsafe { instance.get_physical_device_properties(d) })).collect();
+    let name_of = |p: &vk::PhysicalDeviceProperties| {
+        p.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+    };
+
+    let candidates: Vec<_> = match wanted {
+        Some(wanted) => {
+            let lower = wanted.to_lowercase();
+            let matching: Vec<_> =
+                named.iter().filter(|(_, p)| name_of(p).to_lowercase().contains(&lower)).cloned().collect();
+            if matching.is_empty() {
+                let available = named.iter().map(|(_, p)| format!("{:?}", name_of(p))).collect::<Vec<_>>().join(", ");
+                return Err(Error::DeviceNotFound { wanted: wanted.to_string(), available });
+            }
+            matching
+        }
+        None => named,
+    };
+    let rank = |t: vk::PhysicalDeviceType| match t {
+        vk::PhysicalDeviceType::DISCRETE_GPU => 0,
+        vk::PhysicalDeviceType::INTEGRATED_GPU => 1,
+        vk::PhysicalDeviceType::VIRTUAL_GPU => 2,
+        vk::PhysicalDeviceType::CPU => 3,
+        _ => 4,
+    };
+    let mut rejected = Vec::new();
+    let mut usable: Vec<_> = candidates
+        .into_iter()
+        .filter_map(|(device, props)| match universal_queue(instance, device, &props) {
+            Ok(family) => Some((rank(props.device_type), device, family)),
+            Err(reason) => {
+                rejected.push(Error::UnsuitableDevice { device: name_of(&props), reason });
+                None
+            }
+        })
+        .collect();
+    usable.sort_by_key(|(rank, _, _)| *rank);
+    match usable.first() {
+        Some(&(_, device, family)) => Ok((device, family)),
+        None => Err(rejected.into_iter().next().unwrap_or(Error::NoDevice)),
+    }
+}
+
+fn universal_queue(
+    instance: &ash::Instance,
+    device: vk::PhysicalDevice,
+    props: &vk::PhysicalDeviceProperties,
+) -> std::result::Result<u32, String> {
+    if props.api_version < API_VERSION {
+        return Err(format!(
+            "it supports Vulkan {}.{}, rrf needs 1.2",
+            vk::api_version_major(props.api_version),
+            vk::api_version_minor(props.api_version)
+        ));
+    }
+    // SAFETY: property query on a device of this instance.
+    let families = unsafe { instance.get_physical_device_queue_family_properties(device) };
+    let wanted = vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE;
+    families
+        .iter()
+        .position(|f| f.queue_flags.contains(wanted))
+        .map(|i| i as u32)
+        .ok_or_else(|| "it has no queue family with both graphics and compute".to_string())
+}

@@ -1,0 +1,20 @@
+//! rrf's Vulkan renderer, on raw ash and gpu-allocator.
+//!
+//! It knows nothing of glTF or path tracing: scenes arrive as plain arrays and shaders as
+//! SPIR-V words compiled by the root crate's build script.
+
+pub mod compute;
+pub mod context;
+pub mod device_info;
+pub mod error;
+pub mod resources;
+pub mod tonemap;
+pub mod validation;
+
+pub use ash::vk;
+pub use context::{Context, ContextOptions, TeardownReport};
+pub use device_info::DeviceInfo;
+pub use error::{Error, Result};
+pub use gpu_allocator::MemoryLocation;
+pub use resources::{Buffer, Image};
+pub use validation::Validation;

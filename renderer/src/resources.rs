@@ -1,0 +1,333 @@
+//! Buffers and 2D images with their memory, and the transfers between them and the CPU.
+//!
+//! Resources are destroyed explicitly through the context that made them; a resource still
+//! alive at [`Context::finish`](crate::Context::finish) is reported as a leak by name.
+
+use ash::vk;
+use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
+use gpu_allocator::MemoryLocation;
+
+use crate::context::Context;
+use crate::error::{Error, Result, VkContext};
+
+pub struct Buffer {
+    pub raw: vk::Buffer,
+    pub size: u64,
+    allocation: Allocation,
+}
+
+impl Buffer {
+    /// The buffer's bytes, for host-visible buffers.
+    pub fn mapped(&self) -> Option<&[u8]> {
+        self.allocation.mapped_slice().map(|s| &s[..self.size as usize])
+    }
+
+    pub fn mapped_mut(&mut self) -> Option<&mut [u8]> {
+        let size = self.size as usize;
+        self.allocation.mapped_slice_mut().map(|s| &mut s[..size])
+    }
+}
+
+/// A 2D image with one mip level, and a view of all of it when its usage allows views
+/// (a transfer-only image has a null view).
+pub struct Image {
+    pub raw: vk::Image,
+    pub view: vk::ImageView,
+    pub format: vk::Format,
+    pub extent: vk::Extent2D,
+    allocation: Allocation,
+}
+
+impl Image {
+    pub fn pixel_count(&self) -> usize {
+        self.extent.width as usize * self.extent.height as usize
+    }
+}
+
+/// How the channels of a format that can be read back are stored.
+#[derive(Clone, Copy)]
+enum Channel {
+    F32,
+    U32,
+    Unorm8,
+}
+
+impl Channel {
+    /// The channel type and channel count of `format`, if it can be read back.
+    fn of(format: vk::Format) -> Option<(Channel, usize)> {
+        match format {
+            vk::Format::R32G32B32A32_SFLOAT => Some((Channel::F32, 4)),
+            vk::Format::R32_SFLOAT => Some((Channel::F32, 1)),
+            vk::Format::R32_UINT => Some((Channel::U32, 1)),
+            vk::Format::R8G8B8A8_UNORM => Some((Channel::Unorm8, 4)),
+            _ => None,
+        }
+    }
+
+    fn bytes(self) -> usize {
+        match self {
+            Channel::F32 | Channel::U32 => 4,
+            Channel::Unorm8 => 1,
+        }
+    }
+
+    fn decode(self, b: &[u8]) -> f32 {
+        match self {
+            Channel::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+            Channel::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+            Channel::Unorm8 => f32::from(b[0]) / 255.0,
+        }
+    }
+}
+
+impl Context {
+    pub fn create_buffer(
+        &self,
+        name: &str,
+        size: u64,
+        usage: vk::BufferUsageFlags,
+        location: MemoryLocation,
+    ) -> Result<Buffer> {
+        let info =
+            vk::BufferCreateInfo::default().size(size.max(4)).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        // SAFETY: valid create info; the buffer is bound to memory before use.
+        let raw = unsafe { self.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
+        let allocation = self
+            .allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location,
+                linear: true,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| {
+                unsafe { self.device.destroy_buffer(raw, None) };
+                Error::Allocation { name: name.to_string(), source }
+            })?;
+        unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
+            .vk("vkBindBufferMemory")?;
+        self.set_name(raw, name);
+        Ok(Buffer { raw, size, allocation })
+    }
+
+    pub fn destroy_buffer(&self, buffer: Buffer) {
+        // SAFETY: the caller has finished all GPU work that uses the buffer.
+        unsafe { self.device.destroy_buffer(buffer.raw, None) };
+        let _ = self.allocator().free(buffer.allocation);
+    }
+
+    /// A host-visible buffer filled with `data`.
+    pub fn create_buffer_with_data(&self, name: &str, data: &[u8], usage: vk::BufferUsageFlags) -> Result<Buffer> {
+        let mut buffer = self.create_buffer(name, data.len() as u64, usage, MemoryLocation::CpuToGpu)?;
+        match buffer.mapped_mut() {
+            Some(bytes) => bytes.copy_from_slice(data),
+            None => {
+                self.destroy_buffer(buffer);
+                return Err(Error::Invalid(format!("buffer {name:?} is not host-visible")));
+            }
+        }
+        Ok(buffer)
+    }
+
+    pub fn create_image(
+        &self,
+        name: &str,
+        extent: vk::Extent2D,
+        format: vk::Format,
+        usage: vk::ImageUsageFlags,
+    ) -> Result<Image> {
+        let max = self.info.limits.max_image_dimension_2d;
+        if extent.width == 0 || extent.height == 0 || extent.width > max || extent.height > max {
+            return Err(Error::Invalid(format!(
+                "image {name:?}: size {}x{} is outside 1..={max} on this device",
+                extent.width, extent.height
+            )));
+        }
+        let info = vk::ImageCreateInfo::default()
+            .image_type(vk::ImageType::TYPE_2D)
+            .format(format)
+            .extent(vk::Extent3D { width: extent.width, height: extent.height, depth: 1 })
+            .mip_levels(1)
+            .array_layers(1)
+            .samples(vk::SampleCountFlags::TYPE_1)
+            .tiling(vk::ImageTiling::OPTIMAL)
+            .usage(usage)
+            .initial_layout(vk::ImageLayout::UNDEFINED);
+        // SAFETY: valid create info; memory is bound before the view is made.
+        let raw = unsafe { self.device.create_image(&info, None) }.vk("vkCreateImage")?;
+        let requirements = unsafe { self.device.get_image_memory_requirements(raw) };
+        let allocation = self
+            .allocator()
+            .allocate(&AllocationCreateDesc {
+                name,
+                requirements,
+                location: MemoryLocation::GpuOnly,
+                linear: false,
+                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+            })
+            .map_err(|source| {
+                unsafe { self.device.destroy_image(raw, None) };
+                Error::Allocation { name: name.to_string(), source }
+            })?;
+        unsafe { self.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
+            .vk("vkBindImageMemory")?;
+        let viewable = vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::COLOR_ATTACHMENT
+            | vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT;
+        let view = if usage.intersects(viewable) {
+            let view_info = vk::ImageViewCreateInfo::default()
+                .image(raw)
+                .view_type(vk::ImageViewType::TYPE_2D)
+                .format(format)
+                .subresource_range(full_range(aspect_of(format)));
+            let view = unsafe { self.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
+            self.set_name(view, name);
+            view
+        } else {
+            vk::ImageView::null()
+        };
+        self.set_name(raw, name);
+        Ok(Image { raw, view, format, extent, allocation })
+    }
+
+    pub fn destroy_image(&self, image: Image) {
+        // SAFETY: the caller has finished all GPU work that uses the image.
+        unsafe {
+            if image.view != vk::ImageView::null() {
+                self.device.destroy_image_view(image.view, None);
+            }
+            self.device.destroy_image(image.raw, None);
+        }
+        let _ = self.allocator().free(image.allocation);
+    }
+
+    /// Records a layout transition that waits for all earlier work and blocks all later work.
+    /// Coarse on purpose: it is for set-up and read-back, not for per-frame pass boundaries.
+    pub fn transition(&self, cmd: vk::CommandBuffer, image: &Image, from: vk::ImageLayout, to: vk::ImageLayout) {
+        let barrier = vk::ImageMemoryBarrier::default()
+            .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+            .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
+            .old_layout(from)
+            .new_layout(to)
+            .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+            .image(image.raw)
+            .subresource_range(full_range(aspect_of(image.format)));
+        // SAFETY: `cmd` is recording and the image belongs to this device.
+        unsafe {
+            self.device.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::PipelineStageFlags::ALL_COMMANDS,
+                vk::DependencyFlags::empty(),
+                &[],
+                &[],
+                &[barrier],
+            )
+        };
+    }
+
+    /// Uploads RGBA f32 pixels into an `R32G32B32A32_SFLOAT` image (usage `TRANSFER_DST`) and
+    /// leaves it in `GENERAL` layout, ready for a compute pass.
+    pub fn upload_rgba32f(&self, image: &Image, pixels: &[[f32; 4]]) -> Result<()> {
+        if image.format != vk::Format::R32G32B32A32_SFLOAT || pixels.len() != image.pixel_count() {
+            return Err(Error::Invalid(format!(
+                "upload_rgba32f: {} pixels into a {:?} image of {}x{}",
+                pixels.len(),
+                image.format,
+                image.extent.width,
+                image.extent.height
+            )));
+        }
+        let staging = self.create_buffer_with_data(
+            "upload staging",
+            bytemuck::cast_slice(pixels),
+            vk::BufferUsageFlags::TRANSFER_SRC,
+        )?;
+        let result = self.submit_once(|cmd| {
+            self.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::TRANSFER_DST_OPTIMAL);
+            let region = copy_region(image);
+            // SAFETY: the staging buffer holds exactly the image's texels.
+            unsafe {
+                self.device.cmd_copy_buffer_to_image(
+                    cmd,
+                    staging.raw,
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                )
+            };
+            self.transition(cmd, image, vk::ImageLayout::TRANSFER_DST_OPTIMAL, vk::ImageLayout::GENERAL);
+        });
+        self.destroy_buffer(staging);
+        result
+    }
+
+    /// Reads an image (usage `TRANSFER_SRC`, currently in `layout`) back as floats, row-major,
+    /// all channels; the image is left in `layout`. 8-bit UNORM channels become `byte / 255`.
+    pub fn read_image(&self, image: &Image, layout: vk::ImageLayout) -> Result<Vec<f32>> {
+        let Some((channel, channels)) = Channel::of(image.format) else {
+            return Err(Error::Invalid(format!("read_image: format {:?} cannot be read back", image.format)));
+        };
+        let size = (image.pixel_count() * channels * channel.bytes()) as u64;
+        let staging = self.create_buffer(
+            "read-back staging",
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        let copied = self.submit_once(|cmd| {
+            self.transition(cmd, image, layout, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
+            // SAFETY: the staging buffer is exactly the image's size.
+            unsafe {
+                self.device.cmd_copy_image_to_buffer(
+                    cmd,
+                    image.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    staging.raw,
+                    &[copy_region(image)],
+                )
+            };
+            self.transition(cmd, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, layout);
+        });
+        let values = copied.and_then(|()| {
+            staging
+                .mapped()
+                .map(|bytes| bytes.chunks_exact(channel.bytes()).map(|b| channel.decode(b)).collect())
+                .ok_or_else(|| Error::Invalid("read-back buffer is not host-visible".into()))
+        });
+        self.destroy_buffer(staging);
+        values
+    }
+}
+
+fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {
+    match format {
+        vk::Format::D32_SFLOAT | vk::Format::D16_UNORM => vk::ImageAspectFlags::DEPTH,
+        _ => vk::ImageAspectFlags::COLOR,
+    }
+}
+
+fn full_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
+    vk::ImageSubresourceRange {
+        aspect_mask: aspect,
+        base_mip_level: 0,
+        level_count: 1,
+        base_array_layer: 0,
+        layer_count: 1,
+    }
+}
+
+fn copy_region(image: &Image) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: aspect_of(image.format),
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_extent(vk::Extent3D { width: image.extent.width, height: image.extent.height, depth: 1 })
+}

@@ -1,0 +1,3 @@
+//! One module per `rrf` subcommand.
+
+pub mod info;

@@ -1,0 +1,28 @@
+//! Shared set-up for GPU tests: lavapipe, validation required, and a teardown that fails the
+//! test on any validation message or leaked resource.
+#![allow(dead_code)] // each test binary uses its own subset
+
+use rrf_renderer::{Context, ContextOptions, Validation};
+
+/// A context on lavapipe (or on `RRF_DEVICE`) with the validation layer required.
+pub fn gpu() -> Context {
+    let options = ContextOptions {
+        validation: Validation::Required,
+        device: Some(std::env::var("RRF_DEVICE").unwrap_or_else(|_| "llvmpipe".into())),
+        ..ContextOptions::from_env()
+    };
+    Context::new(&options).unwrap_or_else(|e| panic!("cannot create the test Vulkan context: {e}"))
+}
+
+/// Tears the context down and fails on any validation message or leaked resource.
+pub fn finish_clean(ctx: Context) {
+    let messages = ctx.validation_log().messages();
+    let report = ctx.finish();
+    assert!(
+        report.is_clean(),
+        "{} validation messages, leaked {:?}:\n{}",
+        report.validation_messages,
+        report.leaked,
+        messages.join("\n")
+    );
+}

@@ -1,0 +1,88 @@
+//! `cargo xtask <task>`: the README's two commands, and the set-up they share.
+//!
+//! On Debian and Ubuntu each task first installs the system packages it needs that are
+//! missing, with apt-get (through sudo when not root), and says exactly what it installs.
+//! Elsewhere it prints the packages to look for and goes on.
+
+use std::process::{Command, ExitCode};
+
+/// What running rrf needs: the Vulkan loader and lavapipe, Mesa's CPU Vulkan driver.
+const RUN_PACKAGES: &[&str] = &["libvulkan1", "mesa-vulkan-drivers"];
+/// What the tests need on top: the Khronos validation layer, which every GPU test runs under,
+/// and a C++ compiler for the vendored glslang.
+const TEST_PACKAGES: &[&str] = &["vulkan-validationlayers", "g++"];
+
+const USAGE: &str = "\
+usage: cargo xtask <task>
+
+tasks:
+  run     install what rrf needs (apt-get), build it and run the main job on the default scene
+  test    install what the tests need (apt-get), then run every test on lavapipe with the
+          Vulkan validation layer on
+  setup   only install the system packages that the tests need";
+
+fn main() -> ExitCode {
+    let task = std::env::args().nth(1).unwrap_or_default();
+    let result = match task.as_str() {
+        "run" => install(RUN_PACKAGES).and_then(|()| cargo(&["run", "--release", "--", "info"])),
+        "test" => install(&[RUN_PACKAGES, TEST_PACKAGES].concat())
+            .and_then(|()| cargo(&["run", "--release", "--", "info"]))
+            .and_then(|()| cargo(&["test", "--release", "--workspace"])),
+        "setup" => install(&[RUN_PACKAGES, TEST_PACKAGES].concat()),
+        "-h" | "--help" | "help" => {
+            println!("{USAGE}");
+            Ok(())
+        }
+        _ => Err(format!("unknown task {task:?}\n\n{USAGE}")),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("xtask: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Installs the Debian packages of `packages` that are not installed yet.
+fn install(packages: &[&str]) -> Result<(), String> {
+    if Command::new("dpkg-query").arg("--version").output().is_err() {
+        eprintln!(
+            "xtask: not a Debian-based system; make sure these (or your distribution's equivalents) \
+             are installed: {}",
+            packages.join(" ")
+        );
+        return Ok(());
+    }
+    let missing: Vec<&str> = packages.iter().copied().filter(|p| !installed(p)).collect();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    eprintln!("xtask: installing missing system packages: {}", missing.join(" "));
+    let root = Command::new("id").arg("-u").output().is_ok_and(|o| o.stdout.starts_with(b"0"));
+    let apt = |args: &[&str]| -> Result<(), String> {
+        let mut cmd = if root { Command::new("apt-get") } else { Command::new("sudo") };
+        if !root {
+            cmd.arg("apt-get");
+        }
+        cmd.args(args).env("DEBIAN_FRONTEND", "noninteractive");
+        let status = cmd.status().map_err(|e| format!("cannot run apt-get: {e}"))?;
+        status.success().then_some(()).ok_or_else(|| format!("apt-get {} failed: {status}", args.join(" ")))
+    };
+    apt(&["update", "-qq"])?;
+    apt(&[&["install", "-y", "-qq", "--no-install-recommends"], missing.as_slice()].concat())
+}
+
+fn installed(package: &str) -> bool {
+    Command::new("dpkg-query")
+        .args(["-W", "-f=${Status}", package])
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).contains("install ok installed"))
+}
+
+fn cargo(args: &[&str]) -> Result<(), String> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    eprintln!("xtask: cargo {}", args.join(" "));
+    let status = Command::new(cargo).args(args).status().map_err(|e| format!("cannot run cargo: {e}"))?;
+    status.success().then_some(()).ok_or_else(|| format!("cargo {} failed: {status}", args.join(" ")))
+}
