@@ -1,2 +1,4 @@
 //! The offline half of rrf: scene import, the reference path tracer and network training.
 //! No Vulkan here.
+
+pub mod scene;

@@ -1,0 +1,519 @@
+//! glTF 2.0 (`.gltf` with external or embedded buffers, and `.glb`) to [`Scene`].
+//!
+//! Everything a malformed file could make the `gltf` crate panic on (accessor ranges, index
+//! ranges) is checked first, so bad input is an error that names the element, never a panic.
+//! Points and lines are skipped with a warning that counts them; triangle strips and fans
+//! are turned into triangle lists.
+
+use std::collections::{HashMap, HashSet};
+use std::path::Path;
+
+use glam::{Mat3, Mat4, Vec2, Vec3};
+use gltf::buffer::Data as BufferData;
+use gltf::mesh::Mode;
+
+use super::error::SceneError;
+use super::sidecar::{Aabb, Sidecar};
+use super::texture::{ColorSpace, Texture};
+use super::{LightKind, Material, MovingLight, Object, Part, PointLight, Scene, View};
+
+/// Extensions a file may list in `extensionsRequired`.
+const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
+pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> Result<Scene, SceneError> {
+    let err = |element: &str, problem: String| SceneError::new(file, element, problem);
+    let bytes = std::fs::read(file).map_err(|e| err("", format!("cannot read: {e}")))?;
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| err("", format!("not a valid glTF or GLB file: {e}")))?;
+    for (i, ext) in document.extensions_required().enumerate() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            return Err(err(
+                &format!("extensionsRequired[{i}]"),
+                format!("extension {ext} is required but not supported (rrf supports {SUPPORTED_EXTENSIONS:?})"),
+            ));
+        }
+    }
+    let document = gltf::Document::from_json(document.into_json()).map_err(|e| match e {
+        gltf::Error::Validation(errors) => {
+            let (path, problem) = &errors[0];
+            err(&path.to_string(), format!("{problem} ({} validation errors in all)", errors.len()))
+        }
+        e => err("", e.to_string()),
+    })?;
+
+    let base = file.parent().unwrap_or(Path::new("."));
+    check_buffer_files(file, &document, base)?;
+    let buffers = gltf::import_buffers(&document, Some(base), blob).map_err(|e| err("buffers", e.to_string()))?;
+    let images = gltf::import_images(&document, Some(base), &buffers).map_err(|e| err("images", e.to_string()))?;
+
+    let sidecar_text = match sidecar_path {
+        Some(p) => Some(std::fs::read_to_string(p).map_err(|e| SceneError::new(p, "", format!("cannot read: {e}")))?),
+        None => None,
+    };
+    let sidecar = match (sidecar_path, &sidecar_text) {
+        (Some(p), Some(text)) => Sidecar::parse(p, text)?,
+        _ => Sidecar::default(),
+    };
+
+    let mut hash = Fnv64::default();
+    hash.write(&bytes);
+    buffers.iter().for_each(|b| hash.write(&b.0));
+    images.iter().for_each(|i| hash.write(&i.pixels));
+    hash.write(sidecar_text.as_deref().unwrap_or_default().as_bytes());
+
+    let mut importer = Importer {
+        file,
+        buffers: &buffers,
+        images: &images,
+        warnings: Vec::new(),
+        textures: Vec::new(),
+        texture_ids: HashMap::new(),
+    };
+    let mut materials: Vec<Material> = document.materials().map(|m| importer.material(&m)).collect();
+    let default_material = materials.len() as u32;
+    // glTF's default material: white, fully metallic, fully rough.
+    materials.push(Material {
+        name: "default".into(),
+        base_color: Vec3::ONE,
+        base_color_texture: None,
+        metallic: 1.0,
+        roughness: 1.0,
+        metallic_roughness_texture: None,
+        emission: Vec3::ZERO,
+        double_sided: false,
+    });
+
+    let gltf_scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+        .ok_or_else(|| err("scenes", "the file has no scene".into()))?;
+    let mut objects: Vec<Object> = Vec::new();
+    let mut point_lights: Vec<PointLight> = Vec::new();
+    let mut views: Vec<View> = Vec::new();
+    let mut node_positions: HashMap<usize, Vec3> = HashMap::new();
+    let mut visited = HashSet::new();
+    let mut skipped_primitives = 0;
+    let mut stack: Vec<(gltf::Node, Mat4)> =
+        gltf_scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect::<Vec<_>>().into_iter().rev().collect();
+    while let Some((node, parent)) = stack.pop() {
+        let element = node_element(&node);
+        if !visited.insert(node.index()) {
+            return Err(err(&element, "is reachable twice; the node hierarchy must be a tree".into()));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !world.is_finite() {
+            return Err(err(&element, "has a non-finite transform".into()));
+        }
+        let node_name = node.name().map(str::to_owned).unwrap_or_else(|| format!("node{}", node.index()));
+        node_positions.insert(node.index(), world.transform_point3(Vec3::ZERO));
+
+        if let Some(mesh) = node.mesh() {
+            if let Some(other) = objects.iter().find(|o| o.name == node_name) {
+                return Err(err(
+                    &element,
+                    format!(
+                        "object name {node_name:?} is also used by nodes[{}]; networks are keyed by name",
+                        other.node
+                    ),
+                ));
+            }
+            let id = objects.len() as u32;
+            let object = importer.object(
+                id,
+                node_name.clone(),
+                node.index(),
+                &mesh,
+                world,
+                default_material,
+                &mut skipped_primitives,
+            )?;
+            objects.push(object);
+        }
+        if let Some(light) = node.light() {
+            match light.kind() {
+                gltf::khr_lights_punctual::Kind::Point => point_lights.push(PointLight {
+                    name: node_name.clone(),
+                    node: node.index(),
+                    position: world.transform_point3(Vec3::ZERO),
+                    intensity: Vec3::from(light.color()) * light.intensity(),
+                }),
+                _ => importer.warnings.push(format!("{element}: only point lights are supported; light skipped")),
+            }
+        }
+        if let Some(camera) = node.camera() {
+            match camera.projection() {
+                gltf::camera::Projection::Perspective(p) if views.is_empty() => {
+                    let eye = world.transform_point3(Vec3::ZERO);
+                    views.push(View {
+                        name: "default".into(),
+                        eye,
+                        target: eye + world.transform_vector3(Vec3::NEG_Z).normalize(),
+                        up: world.transform_vector3(Vec3::Y).normalize(),
+                        fov_y: p.yfov().to_degrees(),
+                    });
+                }
+                gltf::camera::Projection::Perspective(_) => {
+                    importer.warnings.push(format!("{element}: only the first camera is used"))
+                }
+                gltf::camera::Projection::Orthographic(_) => {
+                    importer.warnings.push(format!("{element}: orthographic cameras are not supported; skipped"))
+                }
+            }
+        }
+        stack.extend(node.children().map(|c| (c, world)).collect::<Vec<_>>().into_iter().rev());
+    }
+    if skipped_primitives > 0 {
+        importer
+            .warnings
+            .push(format!("skipped {skipped_primitives} primitives that are not triangles (points or lines)"));
+    }
+
+    let sidecar_file = sidecar_path.unwrap_or(file);
+    for (view_name, spec) in &sidecar.views {
+        if view_name == "default" {
+            return Err(SceneError::new(sidecar_file, "views.default", "the name is taken by the glTF camera"));
+        }
+        views.push(View {
+            name: view_name.clone(),
+            eye: spec.eye.into(),
+            target: spec.target.into(),
+            up: Vec3::Y,
+            fov_y: spec.fov_y,
+        });
+    }
+    let moving_light = match &sidecar.light {
+        None => None,
+        Some(domain) => {
+            let bounds = Aabb { min: domain.min.into(), max: domain.max.into() };
+            let (kind, default_position) = if let Some(i) = point_lights.iter().position(|l| l.name == domain.node) {
+                (LightKind::Point(i), point_lights[i].position)
+            } else if let Some(o) = objects.iter().find(|o| o.name == domain.node) {
+                if !o.parts.iter().any(|p| materials[p.material as usize].is_emissive()) {
+                    return Err(SceneError::new(
+                        sidecar_file,
+                        "light.node",
+                        format!(
+                            "node {:?} is not a light: it has no emissive material and no point light",
+                            domain.node
+                        ),
+                    ));
+                }
+                (LightKind::Area(o.id), node_positions[&o.node])
+            } else {
+                let lights: Vec<&str> = point_lights
+                    .iter()
+                    .map(|l| l.name.as_str())
+                    .chain(
+                        objects
+                            .iter()
+                            .filter(|o| o.parts.iter().any(|p| materials[p.material as usize].is_emissive()))
+                            .map(|o| o.name.as_str()),
+                    )
+                    .collect();
+                return Err(SceneError::new(
+                    sidecar_file,
+                    "light.node",
+                    format!("no light node named {:?} in {} (lights: {lights:?})", domain.node, file.display()),
+                ));
+            };
+            if !bounds.contains(default_position) {
+                return Err(SceneError::new(
+                    sidecar_file,
+                    "light",
+                    format!("the glTF puts {:?} at {default_position}, outside the box", domain.node),
+                ));
+            }
+            Some(MovingLight { node_name: domain.node.clone(), kind, default_position, bounds })
+        }
+    };
+
+    Ok(Scene {
+        name,
+        gltf_path: file.to_path_buf(),
+        sidecar_path: sidecar_path.map(Path::to_path_buf),
+        objects,
+        materials,
+        textures: importer.textures,
+        point_lights,
+        views,
+        moving_light,
+        camera_box: sidecar.camera.as_ref().map(|c| Aabb { min: c.min.into(), max: c.max.into() }),
+        bake: sidecar.bake,
+        warnings: importer.warnings,
+        content_hash: hash.0,
+    })
+}
+
+fn node_element(node: &gltf::Node) -> String {
+    match node.name() {
+        Some(name) => format!("nodes[{}] {name:?}", node.index()),
+        None => format!("nodes[{}]", node.index()),
+    }
+}
+
+/// Names the buffer whose external file is missing, which the `gltf` crate does not.
+fn check_buffer_files(file: &Path, document: &gltf::Document, base: &Path) -> Result<(), SceneError> {
+    for buffer in document.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = buffer.source() {
+            if !uri.starts_with("data:") && !base.join(uri).is_file() {
+                return Err(SceneError::new(
+                    file,
+                    format!("buffers[{}]", buffer.index()),
+                    format!("file {uri:?} not found beside the glTF"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+struct Importer<'a> {
+    file: &'a Path,
+    buffers: &'a [BufferData],
+    images: &'a [gltf::image::Data],
+    warnings: Vec<String>,
+    textures: Vec<Texture>,
+    texture_ids: HashMap<(usize, ColorSpace), u32>,
+}
+
+impl Importer<'_> {
+    fn material(&mut self, m: &gltf::Material) -> Material {
+        let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("materials[{}]", m.index().unwrap_or(0)));
+        let pbr = m.pbr_metallic_roughness();
+        let [r, g, b, _alpha] = pbr.base_color_factor();
+        let base_color_texture = pbr.base_color_texture().map(|t| self.texture(&name, &t, ColorSpace::Srgb));
+        let metallic_roughness_texture =
+            pbr.metallic_roughness_texture().map(|t| self.texture(&name, &t, ColorSpace::Linear));
+        if m.emissive_texture().is_some() {
+            self.warnings.push(format!("material {name:?}: emissive texture ignored (the factor is used)"));
+        }
+        Material {
+            base_color: Vec3::new(r, g, b),
+            base_color_texture,
+            metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+            roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+            metallic_roughness_texture,
+            emission: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+            double_sided: m.double_sided(),
+            name,
+        }
+    }
+
+    fn texture(&mut self, material: &str, info: &gltf::texture::Info, space: ColorSpace) -> u32 {
+        if info.tex_coord() != 0 {
+            self.warnings
+                .push(format!("material {material:?}: texture uses TEXCOORD_{}; UV0 is used", info.tex_coord()));
+        }
+        let image = info.texture().source().index();
+        if let Some(&id) = self.texture_ids.get(&(image, space)) {
+            return id;
+        }
+        let data = &self.images[image];
+        let texels = to_rgba8(data).unwrap_or_else(|| {
+            self.warnings.push(format!("images[{image}]: pixel format {:?} unsupported; white used", data.format));
+            vec![[255; 4]; (data.width * data.height) as usize]
+        });
+        let id = self.textures.len() as u32;
+        self.textures.push(Texture {
+            name: format!("images[{image}]"),
+            width: data.width,
+            height: data.height,
+            texels,
+            color_space: space,
+        });
+        self.texture_ids.insert((image, space), id);
+        id
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn object(
+        &mut self,
+        id: u32,
+        name: String,
+        node: usize,
+        mesh: &gltf::Mesh,
+        world: Mat4,
+        default_material: u32,
+        skipped: &mut usize,
+    ) -> Result<Object, SceneError> {
+        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+        let flip = world.determinant() < 0.0;
+        let mut object = Object {
+            id,
+            name,
+            node,
+            positions: vec![],
+            normals: vec![],
+            uvs: vec![],
+            triangles: vec![],
+            parts: vec![],
+        };
+        for prim in mesh.primitives() {
+            let element = match mesh.name() {
+                Some(n) => format!("meshes[{}] {n:?} primitives[{}]", mesh.index(), prim.index()),
+                None => format!("meshes[{}] primitives[{}]", mesh.index(), prim.index()),
+            };
+            if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+                *skipped += 1;
+                continue;
+            }
+            for (semantic, accessor) in prim.attributes() {
+                if matches!(
+                    semantic,
+                    gltf::Semantic::Positions | gltf::Semantic::Normals | gltf::Semantic::TexCoords(0)
+                ) {
+                    self.check_accessor(&accessor)?;
+                }
+            }
+            if let Some(indices) = prim.indices() {
+                self.check_accessor(&indices)?;
+            }
+            let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+            let local: Vec<Vec3> = reader
+                .read_positions()
+                .ok_or_else(|| SceneError::new(self.file, &element, "has no POSITION attribute"))?
+                .map(Vec3::from)
+                .collect();
+            if let Some(i) = local.iter().position(|p| !p.is_finite()) {
+                return Err(SceneError::new(self.file, &element, format!("POSITION of vertex {i} is not finite")));
+            }
+            let n = local.len() as u32;
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..n).collect(),
+            };
+            if let Some(bad) = indices.iter().find(|&&i| i >= n) {
+                return Err(SceneError::new(
+                    self.file,
+                    &element,
+                    format!(
+                        "index {bad} is out of range for {n} vertices (accessors[{}])",
+                        prim.indices().map_or(0, |a| a.index())
+                    ),
+                ));
+            }
+            let mut triangles = triangle_list(prim.mode(), &indices);
+            if flip {
+                triangles.iter_mut().for_each(|t| t.swap(1, 2));
+            }
+            let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+            let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
+                Some(t) => t.into_f32().map(Vec2::from).collect(),
+                None => vec![Vec2::ZERO; local.len()],
+            };
+            let positions: Vec<Vec3> = local.iter().map(|&p| world.transform_point3(p)).collect();
+
+            let base = object.positions.len() as u32;
+            let first = object.triangles.len() as u32;
+            match normals {
+                Some(normals) => {
+                    object.positions.extend(&positions);
+                    object.normals.extend(normals.iter().map(|&n| (normal_matrix * n).normalize_or(Vec3::Y)));
+                    object.uvs.extend(&uvs);
+                    object.triangles.extend(triangles.iter().map(|t| t.map(|i| base + i)));
+                }
+                // glTF: without normals, flat normals. Each triangle gets its own vertices.
+                None => {
+                    for t in &triangles {
+                        let [a, b, c] = t.map(|i| positions[i as usize]);
+                        let face = (b - a).cross(c - a).normalize_or(Vec3::Y);
+                        let v = object.positions.len() as u32;
+                        object.positions.extend([a, b, c]);
+                        object.normals.extend([face; 3]);
+                        object.uvs.extend(t.map(|i| uvs[i as usize]));
+                        object.triangles.push([v, v + 1, v + 2]);
+                    }
+                }
+            }
+            let material = prim.material().index().map_or(default_material, |i| i as u32);
+            object.parts.push(Part { material, triangles: first..object.triangles.len() as u32 });
+        }
+        Ok(object)
+    }
+
+    /// Checks that an accessor's elements lie inside its buffer view and the view inside its
+    /// buffer, so that reading it cannot go out of bounds.
+    fn check_accessor(&self, accessor: &gltf::Accessor) -> Result<(), SceneError> {
+        let element = format!("accessors[{}]", accessor.index());
+        let fail = |problem: String| Err(SceneError::new(self.file, &element, problem));
+        if accessor.sparse().is_some() {
+            return fail("sparse accessors are not supported".into());
+        }
+        let Some(view) = accessor.view() else {
+            return fail("has no bufferView".into());
+        };
+        let buffer_len = self.buffers[view.buffer().index()].len();
+        if view.offset() + view.length() > buffer_len {
+            return fail(format!(
+                "bufferViews[{}] ends at byte {} but buffers[{}] holds only {buffer_len} bytes",
+                view.index(),
+                view.offset() + view.length(),
+                view.buffer().index()
+            ));
+        }
+        let element_size = accessor.size();
+        let stride = view.stride().unwrap_or(element_size);
+        if accessor.count() > 0 {
+            let end = accessor.offset() + stride * (accessor.count() - 1) + element_size;
+            if end > view.length() {
+                return fail(format!(
+                    "{} elements need {end} bytes but bufferViews[{}] holds only {}",
+                    accessor.count(),
+                    view.index(),
+                    view.length()
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Triangle list from indices in any of the three triangle modes; counter-clockwise kept.
+fn triangle_list(mode: Mode, indices: &[u32]) -> Vec<[u32; 3]> {
+    match mode {
+        Mode::TriangleStrip => (2..indices.len())
+            .map(|i| {
+                if i % 2 == 0 {
+                    [indices[i - 2], indices[i - 1], indices[i]]
+                } else {
+                    [indices[i - 1], indices[i - 2], indices[i]]
+                }
+            })
+            .collect(),
+        Mode::TriangleFan => (2..indices.len()).map(|i| [indices[0], indices[i - 1], indices[i]]).collect(),
+        _ => indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+    }
+}
+
+fn to_rgba8(data: &gltf::image::Data) -> Option<Vec<[u8; 4]>> {
+    use gltf::image::Format;
+    let p = &data.pixels;
+    let texels = match data.format {
+        Format::R8 => p.iter().map(|&v| [v, v, v, 255]).collect(),
+        Format::R8G8 => p.chunks_exact(2).map(|c| [c[0], c[1], 0, 255]).collect(),
+        Format::R8G8B8 => p.chunks_exact(3).map(|c| [c[0], c[1], c[2], 255]).collect(),
+        Format::R8G8B8A8 => p.chunks_exact(4).map(|c| [c[0], c[1], c[2], c[3]]).collect(),
+        // 16-bit channels are little-endian; keep the high byte.
+        Format::R16G16B16 => p.chunks_exact(6).map(|c| [c[1], c[3], c[5], 255]).collect(),
+        Format::R16G16B16A16 => p.chunks_exact(8).map(|c| [c[1], c[3], c[5], c[7]]).collect(),
+        _ => return None,
+    };
+    Some(texels)
+}
+
+/// FNV-1a, 64 bits: stable across Rust versions and platforms, unlike `DefaultHasher`.
+struct Fnv64(u64);
+
+impl Default for Fnv64 {
+    fn default() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+}
+
+impl Fnv64 {
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+}

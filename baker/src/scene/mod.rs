@@ -1,0 +1,185 @@
+//! Scenes: a glTF 2.0 file plus a TOML sidecar, imported into plain data.
+//!
+//! **Radiometric convention.** All colours are linear RGB. Emission (`emissiveFactor ×
+//! KHR_materials_emissive_strength`) is *radiance*, in W·sr⁻¹·m⁻² per channel. A
+//! `KHR_lights_punctual` point light's `color × intensity` is *radiant intensity*, in W·sr⁻¹
+//! per channel: rrf does not convert the glTF's photometric units. Lengths are metres.
+//!
+//! An **object** is a glTF node with a mesh. Objects are numbered in depth-first order of the
+//! scene's nodes, and named by their node: per-object networks are keyed by that name, so
+//! names must be unique.
+
+mod error;
+mod gltf_import;
+mod sidecar;
+mod texture;
+
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+
+use glam::{Vec2, Vec3};
+
+pub use error::SceneError;
+pub use sidecar::{Aabb, BakeOverrides, BakePresets, Sidecar, ViewSpec};
+pub use texture::{ColorSpace, Texture};
+
+/// File names looked for in a scene folder.
+pub const GLTF_NAMES: [&str; 2] = ["scene.gltf", "scene.glb"];
+
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// The scene folder's name, or the glTF file's stem.
+    pub name: String,
+    pub gltf_path: PathBuf,
+    pub sidecar_path: Option<PathBuf>,
+    pub objects: Vec<Object>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub point_lights: Vec<PointLight>,
+    /// The glTF camera first (named `default`), then the sidecar's views.
+    pub views: Vec<View>,
+    /// The moving light and its box; `None` without a sidecar `[light]`.
+    pub moving_light: Option<MovingLight>,
+    /// Where the camera may be during the walkthrough; `None` without a sidecar `[camera]`.
+    pub camera_box: Option<Aabb>,
+    pub bake: BakePresets,
+    /// Things that were skipped or approximated while importing, for the user to see.
+    pub warnings: Vec<String>,
+    /// FNV-1a 64 over the glTF, its buffers and images, and the sidecar: a model file records
+    /// it so that a model cannot be used with another scene.
+    pub content_hash: u64,
+}
+
+#[derive(Clone, Debug)]
+pub struct Object {
+    pub id: u32,
+    pub name: String,
+    /// Index of the glTF node.
+    pub node: usize,
+    /// World-space vertices.
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    /// Counter-clockwise seen from the front.
+    pub triangles: Vec<[u32; 3]>,
+    /// Runs of triangles that share a material, one per glTF primitive.
+    pub parts: Vec<Part>,
+}
+
+#[derive(Clone, Debug)]
+pub struct Part {
+    pub material: u32,
+    pub triangles: Range<u32>,
+}
+
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    /// Linear RGB base colour factor.
+    pub base_color: Vec3,
+    pub base_color_texture: Option<u32>,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Roughness in G, metalness in B, as glTF says; multiplies the factors.
+    pub metallic_roughness_texture: Option<u32>,
+    /// Emitted radiance (linear RGB).
+    pub emission: Vec3,
+    pub double_sided: bool,
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct PointLight {
+    pub name: String,
+    pub node: usize,
+    pub position: Vec3,
+    /// Radiant intensity (linear RGB, W/sr).
+    pub intensity: Vec3,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct View {
+    pub name: String,
+    pub eye: Vec3,
+    pub target: Vec3,
+    pub up: Vec3,
+    /// Vertical field of view, degrees.
+    pub fov_y: f32,
+}
+
+/// The light the networks learn to follow.
+#[derive(Clone, Debug)]
+pub struct MovingLight {
+    pub node_name: String,
+    pub kind: LightKind,
+    /// Where the glTF puts the light: the node's world translation.
+    pub default_position: Vec3,
+    /// The box the position may take.
+    pub bounds: Aabb,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LightKind {
+    /// Index into [`Scene::point_lights`].
+    Point(usize),
+    /// Id of the emissive object; moving the light translates it.
+    Area(u32),
+}
+
+impl Scene {
+    /// Loads a scene folder (holding `scene.gltf` or `scene.glb`, and `scene.toml`) or a
+    /// glTF file (with an optional sidecar of the same stem and extension `.toml`).
+    pub fn load(path: &Path) -> Result<Self, SceneError> {
+        let (gltf_path, sidecar_path, name) = locate(path)?;
+        gltf_import::import(&gltf_path, sidecar_path.as_deref(), name)
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.objects.iter().map(|o| o.triangles.len()).sum()
+    }
+
+    pub fn object_by_name(&self, name: &str) -> Option<&Object> {
+        self.objects.iter().find(|o| o.name == name)
+    }
+
+    pub fn view(&self, name: &str) -> Option<&View> {
+        self.views.iter().find(|v| v.name == name)
+    }
+
+    /// Emissive objects: every object with an emissive material is an area light.
+    pub fn area_lights(&self) -> impl Iterator<Item = &Object> {
+        self.objects.iter().filter(|o| o.parts.iter().any(|p| self.materials[p.material as usize].is_emissive()))
+    }
+
+    /// The bounding box of all geometry.
+    pub fn bounds(&self) -> Aabb {
+        let mut b = Aabb { min: Vec3::splat(f32::INFINITY), max: Vec3::splat(f32::NEG_INFINITY) };
+        for p in self.objects.iter().flat_map(|o| &o.positions) {
+            b.min = b.min.min(*p);
+            b.max = b.max.max(*p);
+        }
+        b
+    }
+}
+
+fn locate(path: &Path) -> Result<(PathBuf, Option<PathBuf>, String), SceneError> {
+    if path.is_dir() {
+        let gltf = GLTF_NAMES.iter().map(|n| path.join(n)).find(|p| p.is_file()).ok_or_else(|| {
+            SceneError::new(path, "", format!("no scene here: expected {} or {}", GLTF_NAMES[0], GLTF_NAMES[1]))
+        })?;
+        let sidecar = path.join("scene.toml");
+        let name = path.canonicalize().ok().and_then(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()));
+        Ok((gltf, sidecar.is_file().then_some(sidecar), name.unwrap_or_else(|| "scene".into())))
+    } else if path.is_file() {
+        let sidecar = path.with_extension("toml");
+        let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        Ok((path.to_path_buf(), sidecar.is_file().then_some(sidecar), name))
+    } else {
+        Err(SceneError::new(path, "", "no such file or folder"))
+    }
+}

@@ -1,0 +1,159 @@
+//! The sidecar: what glTF cannot say, in a small TOML file beside it.
+//!
+//! ```toml
+//! [light]                    # the light that moves, and the box its position may take
+//! node = "CeilingLight"      # a KHR_lights_punctual point-light node or an emissive mesh node
+//! min = [0.15, 0.45, 0.15]   # metres, world space
+//! max = [0.40, 0.54, 0.40]
+//!
+//! [camera]                   # where the camera may be during the walkthrough
+//! min = [0.05, 0.05, -0.9]
+//! max = [0.50, 0.50, 0.05]
+//!
+//! [views.front]              # named views for tests, benchmarks and figures
+//! eye = [0.278, 0.273, -0.8]
+//! target = [0.278, 0.273, 0.0]
+//! fov_y = 39.3               # vertical field of view, degrees
+//!
+//! [bake.final]               # overrides of a bake preset (test, preview, final)
+//! configurations = 400
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::Vec3;
+use serde::Deserialize;
+
+use super::error::SceneError;
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sidecar {
+    pub light: Option<LightDomain>,
+    pub camera: Option<CameraDomain>,
+    #[serde(default)]
+    pub views: BTreeMap<String, ViewSpec>,
+    #[serde(default)]
+    pub bake: BakePresets,
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightDomain {
+    pub node: String,
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDomain {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+}
+
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViewSpec {
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    /// Vertical field of view in degrees.
+    pub fov_y: f32,
+}
+
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BakePresets {
+    pub test: Option<BakeOverrides>,
+    pub preview: Option<BakeOverrides>,
+    #[serde(rename = "final")]
+    pub final_: Option<BakeOverrides>,
+}
+
+/// Settings of a bake preset that a scene may override; unset fields keep the preset's value.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BakeOverrides {
+    /// Latin-hypercube configurations (light position × viewpoint).
+    pub configurations: Option<u32>,
+    /// Rays cast over the sphere from each configuration's viewpoint; each hit is a sample.
+    pub rays_per_configuration: Option<u32>,
+    /// Paths traced per sample to estimate its direct and indirect radiance.
+    pub paths_per_sample: Option<u32>,
+    /// Longest path, in bounces.
+    pub max_depth: Option<u32>,
+    /// Levenberg–Marquardt iterations per network at most.
+    pub max_iterations: Option<u32>,
+}
+
+/// An axis-aligned box in world space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub fn contains(&self, p: Vec3) -> bool {
+        p.cmpge(self.min).all() && p.cmple(self.max).all()
+    }
+
+    /// The point at `t` in [0, 1]³ (0 is `min`, 1 is `max`).
+    pub fn lerp(&self, t: Vec3) -> Vec3 {
+        self.min + (self.max - self.min) * t
+    }
+}
+
+impl Sidecar {
+    pub fn parse(file: &Path, text: &str) -> Result<Self, SceneError> {
+        let sidecar: Sidecar = toml::from_str(text).map_err(|e| {
+            let element = match e.span() {
+                Some(span) => format!("line {}", text[..span.start.min(text.len())].lines().count().max(1)),
+                None => String::new(),
+            };
+            SceneError::new(file, element, e.message().trim().to_string())
+        })?;
+        sidecar.check(file)?;
+        Ok(sidecar)
+    }
+
+    /// Checks what serde cannot: finite numbers, boxes with min ≤ max, sensible views.
+    fn check(&self, file: &Path) -> Result<(), SceneError> {
+        if let Some(light) = &self.light {
+            check_box(file, "light", light.min, light.max)?;
+        }
+        if let Some(camera) = &self.camera {
+            check_box(file, "camera", camera.min, camera.max)?;
+        }
+        for (name, view) in &self.views {
+            let element = format!("views.{name}");
+            if !view.eye.iter().chain(&view.target).all(|v| v.is_finite()) {
+                return Err(SceneError::new(file, element, "eye and target must be finite"));
+            }
+            if Vec3::from(view.eye).distance(Vec3::from(view.target)) < 1e-6 {
+                return Err(SceneError::new(file, element, "eye and target are the same point"));
+            }
+            if !(view.fov_y > 0.0 && view.fov_y < 180.0) {
+                return Err(SceneError::new(file, element + ".fov_y", "must be between 0 and 180 degrees"));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn check_box(file: &Path, key: &str, min: [f32; 3], max: [f32; 3]) -> Result<(), SceneError> {
+    if !min.iter().chain(&max).all(|v| v.is_finite()) {
+        return Err(SceneError::new(file, key, "min and max must be finite"));
+    }
+    for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+        if min[axis] > max[axis] {
+            return Err(SceneError::new(
+                file,
+                key,
+                format!("min > max on axis {name} ({} > {})", min[axis], max[axis]),
+            ));
+        }
+    }
+    Ok(())
+}
