@@ -1,3 +1,4 @@
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -15,10 +16,13 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Show the Vulkan device, driver, API version and the limits that matter to rrf.
+    /// Show the Vulkan device, driver, API version and limits; or, given a scene, its
+    /// objects, lights, views and domains.
     ///
-    /// The first thing to run when something is wrong.
+    /// Without SCENE this is the first thing to run when something is wrong.
     Info {
+        /// A scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+        scene: Option<PathBuf>,
         /// Print one line of JSON instead of text.
         #[arg(long)]
         json: bool,
@@ -28,7 +32,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Info { json } => rrf::commands::info::run(json),
+        Command::Info { scene, json } => rrf::commands::info::run(scene.as_deref(), json),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

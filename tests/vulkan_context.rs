@@ -3,9 +3,7 @@
 
 mod common;
 
-use std::process::Command;
-
-use common::{finish_clean, gpu};
+use common::{finish_clean, gpu, rrf};
 use rrf_renderer::{vk, MemoryLocation};
 
 #[test]
@@ -79,15 +77,6 @@ fn bad_image_size_is_an_error_not_a_panic() {
     let message = result.err().expect("a 0-pixel image must be refused").to_string();
     assert!(message.contains("\"empty\"") && message.contains("0x4"), "{message}");
     finish_clean(ctx);
-}
-
-fn rrf(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
-    let mut cmd = Command::new(env!("CARGO_BIN_EXE_rrf"));
-    cmd.args(args).env("RRF_DEVICE", "llvmpipe");
-    for (k, v) in env {
-        cmd.env(k, v);
-    }
-    cmd.output().expect("run rrf")
 }
 
 #[test]

@@ -2,3 +2,4 @@
 //! No Vulkan here.
 
 pub mod scene;
+pub use glam;

@@ -1,9 +1,22 @@
-//! `rrf info`: the Vulkan device, its driver and the limits that matter to the renderer.
+//! `rrf info [SCENE]`: without a scene, the Vulkan device, its driver and the limits that
+//! matter to the renderer; with one, a summary of the scene.
+
+use std::path::Path;
 
 use anyhow::Result;
+use rrf_baker::glam::Vec3;
+use rrf_baker::scene::{LightKind, Scene};
 use rrf_renderer::{Context, ContextOptions};
+use serde_json::json;
 
-pub fn run(json: bool) -> Result<()> {
+pub fn run(scene: Option<&Path>, json: bool) -> Result<()> {
+    match scene {
+        Some(path) => scene_info(path, json),
+        None => device_info(json),
+    }
+}
+
+fn device_info(json: bool) -> Result<()> {
     let ctx = Context::new(&ContextOptions::from_env())?;
     if json {
         println!("{}", serde_json::to_string(&ctx.info)?);
@@ -19,4 +32,95 @@ pub fn run(json: bool) -> Result<()> {
         );
     }
     Ok(())
+}
+
+fn scene_info(path: &Path, json: bool) -> Result<()> {
+    let scene = Scene::load(path)?;
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let area_lights = scene.area_lights().count();
+    let material_names = |o: &rrf_baker::scene::Object| -> Vec<String> {
+        o.parts.iter().map(|p| scene.materials[p.material as usize].name.clone()).collect()
+    };
+    let aabb = |b: &rrf_baker::scene::Aabb| json!({ "min": point(b.min), "max": point(b.max) });
+    let moving_light = scene.moving_light.as_ref().map(|l| {
+        json!({
+            "node": l.node_name,
+            "kind": match l.kind { LightKind::Point(_) => "point", LightKind::Area(_) => "area" },
+            "default_position": point(l.default_position),
+            "box": aabb(&l.bounds),
+        })
+    });
+    if json {
+        let summary = json!({
+            "scene": scene.name,
+            "gltf": scene.gltf_path,
+            "sidecar": scene.sidecar_path,
+            "objects": scene.objects.len(),
+            "triangles": scene.triangle_count(),
+            "lights": scene.point_lights.len() + area_lights,
+            "point_lights": scene.point_lights.len(),
+            "area_lights": area_lights,
+            "materials": scene.materials.len(),
+            "textures": scene.textures.len(),
+            "views": scene.views.iter().map(|v| &v.name).collect::<Vec<_>>(),
+            "moving_light": moving_light,
+            "camera_box": scene.camera_box.as_ref().map(aabb),
+            "content_hash": format!("{:016x}", scene.content_hash),
+            "object_list": scene.objects.iter().map(|o| json!({
+                "id": o.id, "name": o.name, "triangles": o.triangles.len(), "materials": material_names(o),
+            })).collect::<Vec<_>>(),
+            "warnings": scene.warnings,
+        });
+        println!("{summary}");
+        return Ok(());
+    }
+
+    println!("scene      {} ({})", scene.name, scene.gltf_path.display());
+    println!(
+        "contents   {} objects, {} triangles, {} materials, {} textures",
+        scene.objects.len(),
+        scene.triangle_count(),
+        scene.materials.len(),
+        scene.textures.len()
+    );
+    println!("\n  id  object                 triangles  materials");
+    for o in &scene.objects {
+        println!("{:>4}  {:<22} {:>9}  {}", o.id, o.name, o.triangles.len(), material_names(o).join(", "));
+    }
+    println!("\nlights");
+    for l in &scene.point_lights {
+        println!("  point  {:<16} at {:?}, intensity {:?} W/sr", l.name, l.position.to_array(), l.intensity.to_array());
+    }
+    for o in scene.area_lights() {
+        let emission =
+            o.parts.iter().map(|p| scene.materials[p.material as usize].emission).fold(Vec3::ZERO, Vec3::max);
+        println!("  area   {:<16} radiance {:?}", o.name, emission.to_array());
+    }
+    println!("\nviews");
+    for v in &scene.views {
+        println!("  {:<10} eye {:?} target {:?} fov {:.1}°", v.name, v.eye.to_array(), v.target.to_array(), v.fov_y);
+    }
+    println!("\ndomains");
+    match &scene.moving_light {
+        Some(l) => println!(
+            "  light   {} at {:?}, moves in {:?} .. {:?}",
+            l.node_name,
+            l.default_position.to_array(),
+            l.bounds.min.to_array(),
+            l.bounds.max.to_array()
+        ),
+        None => println!("  light   none (no [light] in a sidecar)"),
+    }
+    match &scene.camera_box {
+        Some(b) => println!("  camera  {:?} .. {:?}", b.min.to_array(), b.max.to_array()),
+        None => println!("  camera  none (no [camera] in a sidecar)"),
+    }
+    Ok(())
+}
+
+/// A point as JSON with the f32 noise rounded away (0.05, not 0.05000000074505806).
+fn point(p: Vec3) -> [f64; 3] {
+    p.to_array().map(|c| (f64::from(c) * 1e6).round() / 1e6)
 }

@@ -26,3 +26,13 @@ pub fn finish_clean(ctx: Context) {
         messages.join("\n")
     );
 }
+
+/// Runs the `rrf` binary on lavapipe with extra environment variables.
+pub fn rrf(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_rrf"));
+    cmd.args(args).env("RRF_DEVICE", "llvmpipe").current_dir(env!("CARGO_MANIFEST_DIR"));
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("run rrf")
+}

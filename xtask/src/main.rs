@@ -1,9 +1,13 @@
-//! `cargo xtask <task>`: the README's two commands, and the set-up they share.
+//! `cargo xtask <task>`: the README's two commands, the set-up they share, and the scene
+//! generator.
 //!
 //! On Debian and Ubuntu each task first installs the system packages it needs that are
 //! missing, with apt-get (through sudo when not root), and says exactly what it installs.
 //! Elsewhere it prints the packages to look for and goes on.
 
+mod scenes;
+
+use std::path::Path;
 use std::process::{Command, ExitCode};
 
 /// What running rrf needs: the Vulkan loader and lavapipe, Mesa's CPU Vulkan driver.
@@ -12,6 +16,9 @@ const RUN_PACKAGES: &[&str] = &["libvulkan1", "mesa-vulkan-drivers"];
 /// and a C++ compiler for the vendored glslang.
 const TEST_PACKAGES: &[&str] = &["vulkan-validationlayers", "g++"];
 
+/// The scene the main job runs on.
+const DEFAULT_SCENE: &str = "scenes/cornell-box";
+
 const USAGE: &str = "\
 usage: cargo xtask <task>
 
@@ -19,16 +26,20 @@ tasks:
   run     install what rrf needs (apt-get), build it and run the main job on the default scene
   test    install what the tests need (apt-get), then run every test on lavapipe with the
           Vulkan validation layer on
-  setup   only install the system packages that the tests need";
+  setup   only install the system packages that the tests need
+  scenes  regenerate the scenes under scenes/ from xtask/src/scenes/";
 
 fn main() -> ExitCode {
     let task = std::env::args().nth(1).unwrap_or_default();
     let result = match task.as_str() {
-        "run" => install(RUN_PACKAGES).and_then(|()| cargo(&["run", "--release", "--", "info"])),
+        "run" => install(RUN_PACKAGES)
+            .and_then(|()| cargo(&["run", "--release", "--", "info"]))
+            .and_then(|()| cargo(&["run", "--release", "--", "info", DEFAULT_SCENE])),
         "test" => install(&[RUN_PACKAGES, TEST_PACKAGES].concat())
             .and_then(|()| cargo(&["run", "--release", "--", "info"]))
             .and_then(|()| cargo(&["test", "--release", "--workspace"])),
         "setup" => install(&[RUN_PACKAGES, TEST_PACKAGES].concat()),
+        "scenes" => scenes::generate(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap_or(Path::new("."))),
         "-h" | "--help" | "help" => {
             println!("{USAGE}");
             Ok(())

@@ -71,17 +71,20 @@ pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> 
     };
     let mut materials: Vec<Material> = document.materials().map(|m| importer.material(&m)).collect();
     let default_material = materials.len() as u32;
-    // glTF's default material: white, fully metallic, fully rough.
-    materials.push(Material {
-        name: "default".into(),
-        base_color: Vec3::ONE,
-        base_color_texture: None,
-        metallic: 1.0,
-        roughness: 1.0,
-        metallic_roughness_texture: None,
-        emission: Vec3::ZERO,
-        double_sided: false,
-    });
+    let uses_default = document.meshes().flat_map(|m| m.primitives()).any(|p| p.material().index().is_none());
+    // glTF's default material, for primitives without one: white, fully metallic, fully rough.
+    if uses_default {
+        materials.push(Material {
+            name: "default".into(),
+            base_color: Vec3::ONE,
+            base_color_texture: None,
+            metallic: 1.0,
+            roughness: 1.0,
+            metallic_roughness_texture: None,
+            emission: Vec3::ZERO,
+            double_sided: false,
+        });
+    }
 
     let gltf_scene = document
         .default_scene()

@@ -109,7 +109,7 @@ impl Sidecar {
     pub fn parse(file: &Path, text: &str) -> Result<Self, SceneError> {
         let sidecar: Sidecar = toml::from_str(text).map_err(|e| {
             let element = match e.span() {
-                Some(span) => format!("line {}", text[..span.start.min(text.len())].lines().count().max(1)),
+                Some(span) => format!("line {}", text[..span.start.min(text.len())].matches('\n').count() + 1),
                 None => String::new(),
             };
             SceneError::new(file, element, e.message().trim().to_string())

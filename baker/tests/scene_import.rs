@@ -1,0 +1,380 @@
+//! Scene import: the shipped scenes load, every container form gives the same scene, and
+//! each kind of bad input is an error that names the file and the element.
+
+use std::path::{Path, PathBuf};
+
+use rrf_baker::glam::Vec3;
+use rrf_baker::scene::{LightKind, Scene, SceneError};
+use serde_json::{json, Value};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap().to_path_buf()
+}
+
+/// A fresh, empty folder for one test.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rrf-scene-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A mesh over `positions` with `indices`, as a glTF with an external buffer.
+fn tiny_gltf(positions: &[[f32; 3]], indices: &[u32]) -> (Value, Vec<u8>) {
+    let mut bin: Vec<u8> = positions.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    let index_offset = bin.len();
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    // glTF requires bounds on POSITION; they need not be tight for these tests.
+    let (min, max) = ([-1e3f32; 3], [1e3f32; 3]);
+    let gltf = json!({
+        "asset": { "version": "2.0" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "name": "Tri", "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 }, "indices": 1 }] }],
+        "accessors": [
+            { "bufferView": 0, "componentType": 5126, "count": positions.len(), "type": "VEC3", "min": min, "max": max },
+            { "bufferView": 1, "componentType": 5125, "count": indices.len(), "type": "SCALAR" },
+        ],
+        "bufferViews": [
+            { "buffer": 0, "byteOffset": 0, "byteLength": index_offset },
+            { "buffer": 0, "byteOffset": index_offset, "byteLength": bin.len() - index_offset },
+        ],
+        "buffers": [{ "uri": "scene.bin", "byteLength": bin.len() }],
+    });
+    (gltf, bin)
+}
+
+const TRIANGLE: [[f32; 3]; 3] = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+
+fn write_scene(dir: &Path, gltf: &Value, bin: &[u8]) -> PathBuf {
+    std::fs::write(dir.join("scene.gltf"), serde_json::to_string(gltf).unwrap()).unwrap();
+    std::fs::write(dir.join("scene.bin"), bin).unwrap();
+    dir.to_path_buf()
+}
+
+fn load_err(path: &Path) -> String {
+    let err: SceneError = Scene::load(path).expect_err("bad input must be refused");
+    err.to_string()
+}
+
+#[test]
+fn shipped_scenes_load() {
+    for (name, min_objects, min_triangles) in
+        [("cornell-box", 8, 30), ("glossy-room", 10, 1000), ("many-objects", 24, 50_000)]
+    {
+        let scene = Scene::load(&repo().join("scenes").join(name)).unwrap_or_else(|e| panic!("{e}"));
+        assert!(scene.objects.len() >= min_objects, "{name}: {} objects", scene.objects.len());
+        assert!(scene.triangle_count() >= min_triangles, "{name}: {} triangles", scene.triangle_count());
+        assert!(scene.warnings.is_empty(), "{name}: {:?}", scene.warnings);
+        assert_eq!(scene.views[0].name, "default", "{name}: the glTF camera is the default view");
+        let light = scene.moving_light.as_ref().expect("every shipped scene has a moving light");
+        assert!(light.bounds.contains(light.default_position));
+        assert!(scene.camera_box.is_some());
+    }
+    let many = Scene::load(&repo().join("scenes/many-objects")).unwrap();
+    assert!(many.materials.iter().filter(|m| m.base_color_texture.is_some()).count() >= 3);
+    assert!(matches!(many.moving_light.unwrap().kind, LightKind::Point(_)));
+}
+
+#[test]
+fn cornell_box_matches_the_published_data() {
+    let scene = Scene::load(&repo().join("scenes/cornell-box")).unwrap();
+    let red = scene.object_by_name("RedWall").unwrap();
+    let material = &scene.materials[red.parts[0].material as usize];
+    assert_eq!(material.base_color.to_array(), [0.63, 0.065, 0.05]);
+    let light = scene.object_by_name("CeilingLight").unwrap();
+    let emission = scene.materials[light.parts[0].material as usize].emission;
+    assert!((emission - Vec3::new(17.0, 12.0, 4.0)).abs().max_element() < 1e-5, "{emission}");
+    // The light faces down, the floor up, the red wall (x = 0.55) towards -x.
+    assert!(light.normals.iter().all(|n| n.y < -0.99));
+    assert!(scene.object_by_name("Floor").unwrap().normals.iter().all(|n| n.y > 0.99));
+    assert!(red.normals.iter().all(|n| n.x < -0.99));
+    let b = scene.bounds();
+    assert!((b.max.y - 0.5488).abs() < 1e-4 && (b.max.z - 0.5592).abs() < 1e-4);
+    let view = &scene.views[0];
+    assert!((view.eye - Vec3::new(0.278, 0.273, -0.8)).length() < 1e-5);
+    assert!((view.target - view.eye).normalize().z > 0.999);
+}
+
+/// Winding agrees with the normals: counter-clockwise seen from the front.
+fn winding_agrees(scene: &Scene) -> bool {
+    scene.objects.iter().all(|o| {
+        o.triangles.iter().all(|t| {
+            let [a, b, c] = t.map(|i| o.positions[i as usize]);
+            let n = o.normals[t[0] as usize] + o.normals[t[1] as usize] + o.normals[t[2] as usize];
+            (b - a).cross(c - a).dot(n) > 0.0
+        })
+    })
+}
+
+#[test]
+fn shipped_scenes_wind_counter_clockwise() {
+    for name in ["cornell-box", "glossy-room", "many-objects"] {
+        assert!(winding_agrees(&Scene::load(&repo().join("scenes").join(name)).unwrap()), "{name}");
+    }
+}
+
+#[test]
+fn glb_and_embedded_buffers_give_the_same_scene() {
+    let src = repo().join("scenes/cornell-box");
+    let gltf: Value = serde_json::from_slice(&std::fs::read(src.join("scene.gltf")).unwrap()).unwrap();
+    let bin = std::fs::read(src.join("scene.bin")).unwrap();
+    let reference = Scene::load(&src).unwrap();
+
+    // Embedded: the buffer as a base64 data URI.
+    let dir = scratch("embedded");
+    let mut embedded = gltf.clone();
+    embedded["buffers"][0]["uri"] = json!(format!("data:application/octet-stream;base64,{}", base64(&bin)));
+    std::fs::write(dir.join("scene.gltf"), serde_json::to_string(&embedded).unwrap()).unwrap();
+    let a = Scene::load(&dir).unwrap();
+
+    // GLB: JSON chunk and BIN chunk in one container.
+    let dir = scratch("glb");
+    let mut glb_json = gltf.clone();
+    glb_json["buffers"][0].as_object_mut().unwrap().remove("uri");
+    let mut json_bytes = serde_json::to_vec(&glb_json).unwrap();
+    while !json_bytes.len().is_multiple_of(4) {
+        json_bytes.push(b' ');
+    }
+    let mut bin_bytes = bin.clone();
+    while !bin_bytes.len().is_multiple_of(4) {
+        bin_bytes.push(0);
+    }
+    let total = 12 + 8 + json_bytes.len() + 8 + bin_bytes.len();
+    let mut glb = Vec::new();
+    glb.extend(b"glTF");
+    glb.extend(2u32.to_le_bytes());
+    glb.extend((total as u32).to_le_bytes());
+    glb.extend((json_bytes.len() as u32).to_le_bytes());
+    glb.extend(b"JSON");
+    glb.extend(&json_bytes);
+    glb.extend((bin_bytes.len() as u32).to_le_bytes());
+    glb.extend(b"BIN\0");
+    glb.extend(&bin_bytes);
+    std::fs::write(dir.join("scene.glb"), &glb).unwrap();
+    let b = Scene::load(&dir).unwrap();
+
+    for scene in [&a, &b] {
+        assert_eq!(scene.objects.len(), reference.objects.len());
+        for (x, y) in scene.objects.iter().zip(&reference.objects) {
+            assert_eq!((&x.name, &x.positions, &x.triangles), (&y.name, &y.positions, &y.triangles));
+        }
+    }
+}
+
+fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let n = chunk.iter().enumerate().fold(0u32, |n, (i, &b)| n | (u32::from(b) << (16 - 8 * i)));
+        for i in 0..4 {
+            if i <= chunk.len() {
+                out.push(ALPHABET[((n >> (18 - 6 * i)) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn node_hierarchy_is_applied_and_mirroring_flips_the_winding() {
+    let dir = scratch("hierarchy");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    // Parent: a matrix that translates by (10, 0, 0); child: TRS mirroring x.
+    gltf["scenes"][0]["nodes"] = json!([1]);
+    gltf["nodes"] = json!([
+        { "name": "Tri", "mesh": 0, "translation": [0.0, 2.0, 0.0], "scale": [-1.0, 1.0, 1.0] },
+        { "name": "Parent", "children": [0],
+          "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 10.0, 0.0, 0.0, 1.0] },
+    ]);
+    let scene = Scene::load(&write_scene(&dir, &gltf, &bin)).unwrap();
+    let tri = scene.object_by_name("Tri").unwrap();
+    let mut corners = tri.positions.clone();
+    corners.sort_by(|a, b| a.to_array().partial_cmp(&b.to_array()).unwrap());
+    assert_eq!(corners, vec![Vec3::new(9.0, 2.0, 0.0), Vec3::new(10.0, 2.0, 0.0), Vec3::new(10.0, 3.0, 0.0)]);
+    // The mirror image of a +z-facing triangle still faces +z. Its vertices in file order
+    // would wind clockwise; the import flips the order to keep it counter-clockwise.
+    let [a, b, c] = tri.triangles[0].map(|i| tri.positions[i as usize]);
+    assert!((b - a).cross(c - a).z > 0.0);
+    // No normals in the file: flat normals that agree with the winding.
+    assert!(winding_agrees(&scene));
+    assert!(tri.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-6));
+}
+
+#[test]
+fn missing_file() {
+    let message = load_err(Path::new("/nonexistent/scene-folder"));
+    assert!(message.contains("/nonexistent/scene-folder") && message.contains("no such file"), "{message}");
+}
+
+#[test]
+fn folder_without_a_scene() {
+    let dir = scratch("empty-folder");
+    let message = load_err(&dir);
+    assert!(message.contains("scene.gltf") && message.contains("scene.glb"), "{message}");
+}
+
+#[test]
+fn broken_json() {
+    let dir = scratch("broken-json");
+    std::fs::write(dir.join("scene.gltf"), "{ \"asset\": { \"version\": \"2.0\" ").unwrap();
+    let message = load_err(&dir);
+    assert!(message.contains("scene.gltf") && message.contains("not a valid glTF"), "{message}");
+}
+
+#[test]
+fn broken_glb_container() {
+    let dir = scratch("broken-glb");
+    let mut glb = b"glTF".to_vec();
+    glb.extend(2u32.to_le_bytes());
+    glb.extend(4000u32.to_le_bytes()); // claims far more than there is
+    glb.extend([0u8; 12]);
+    std::fs::write(dir.join("scene.glb"), glb).unwrap();
+    let message = load_err(&dir);
+    assert!(message.contains("scene.glb") && message.contains("not a valid glTF or GLB"), "{message}");
+}
+
+#[test]
+fn missing_buffer_file() {
+    let dir = scratch("missing-buffer");
+    let (gltf, _) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    std::fs::write(dir.join("scene.gltf"), serde_json::to_string(&gltf).unwrap()).unwrap();
+    let message = load_err(&dir);
+    assert!(message.contains("buffers[0]") && message.contains("scene.bin"), "{message}");
+}
+
+#[test]
+fn short_buffer() {
+    let dir = scratch("short-buffer");
+    let (gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    let message = load_err(&write_scene(&dir, &gltf, &bin[..20]));
+    assert!(message.contains("buffer"), "{message}");
+}
+
+#[test]
+fn accessor_past_its_buffer_view() {
+    let dir = scratch("accessor-range");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["accessors"][0]["count"] = json!(30);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("accessors[0]") && message.contains("bufferViews[0]"), "{message}");
+}
+
+#[test]
+fn index_out_of_range() {
+    let dir = scratch("index-range");
+    let (gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 7]);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("meshes[0] primitives[0]") && message.contains("index 7 is out of range"), "{message}");
+}
+
+#[test]
+fn non_finite_positions() {
+    let dir = scratch("nan");
+    let (gltf, bin) = tiny_gltf(&[[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, f32::INFINITY, 0.0]], &[0, 1, 2]);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("meshes[0] primitives[0]") && message.contains("vertex 1 is not finite"), "{message}");
+}
+
+#[test]
+fn unsupported_required_extension_is_named() {
+    let dir = scratch("extension");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["extensionsUsed"] = json!(["KHR_draco_mesh_compression"]);
+    gltf["extensionsRequired"] = json!(["KHR_draco_mesh_compression"]);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("extensionsRequired[0]") && message.contains("KHR_draco_mesh_compression"), "{message}");
+}
+
+#[test]
+fn non_triangle_primitives_are_skipped_and_counted() {
+    let dir = scratch("lines");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    let triangles = gltf["meshes"][0]["primitives"][0].clone();
+    let mut lines = triangles.clone();
+    lines["mode"] = json!(1);
+    let mut points = triangles.clone();
+    points["mode"] = json!(0);
+    gltf["meshes"][0]["primitives"] = json!([triangles, lines, points]);
+    let scene = Scene::load(&write_scene(&dir, &gltf, &bin)).unwrap();
+    assert_eq!(scene.triangle_count(), 1);
+    assert!(scene.warnings.iter().any(|w| w.contains("skipped 2 primitives")), "{:?}", scene.warnings);
+}
+
+#[test]
+fn duplicate_object_names_are_refused() {
+    let dir = scratch("duplicate-names");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["scenes"][0]["nodes"] = json!([0, 1]);
+    gltf["nodes"] = json!([{ "name": "Tri", "mesh": 0 }, { "name": "Tri", "mesh": 0 }]);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("nodes[1] \"Tri\"") && message.contains("nodes[0]"), "{message}");
+}
+
+/// The Cornell box with its sidecar replaced by `sidecar`.
+fn cornell_with_sidecar(test: &str, sidecar: &str) -> PathBuf {
+    let dir = scratch(test);
+    for file in ["scene.gltf", "scene.bin"] {
+        std::fs::copy(repo().join("scenes/cornell-box").join(file), dir.join(file)).unwrap();
+    }
+    std::fs::write(dir.join("scene.toml"), sidecar).unwrap();
+    dir
+}
+
+#[test]
+fn sidecar_naming_a_missing_light() {
+    let dir = cornell_with_sidecar("no-light", "[light]\nnode = \"Sun\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n");
+    let message = load_err(&dir);
+    assert!(
+        message.contains("scene.toml") && message.contains("light.node") && message.contains("\"Sun\""),
+        "{message}"
+    );
+    assert!(message.contains("CeilingLight"), "the error lists the lights there are: {message}");
+}
+
+#[test]
+fn sidecar_naming_a_node_that_is_not_a_light() {
+    let dir = cornell_with_sidecar("not-a-light", "[light]\nnode = \"TallBlock\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n");
+    let message = load_err(&dir);
+    assert!(message.contains("light.node") && message.contains("is not a light"), "{message}");
+}
+
+#[test]
+fn sidecar_box_with_min_above_max() {
+    let dir = cornell_with_sidecar("inverted-box", "[camera]\nmin = [0, 0.5, 0]\nmax = [1, 0.2, 1]\n");
+    let message = load_err(&dir);
+    assert!(
+        message.contains("scene.toml") && message.contains("camera") && message.contains("min > max on axis y"),
+        "{message}"
+    );
+}
+
+#[test]
+fn sidecar_unknown_key() {
+    let dir = cornell_with_sidecar("unknown-key", "[camera]\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nfov = 3\n");
+    let message = load_err(&dir);
+    assert!(
+        message.contains("scene.toml") && message.contains("line 4") && message.contains("unknown field `fov`"),
+        "{message}"
+    );
+}
+
+#[test]
+fn sidecar_view_with_bad_field_of_view() {
+    let dir = cornell_with_sidecar("bad-view", "[views.top]\neye = [0, 1, 0]\ntarget = [0, 0, 0]\nfov_y = 190\n");
+    let message = load_err(&dir);
+    assert!(message.contains("views.top.fov_y"), "{message}");
+}
+
+#[test]
+fn default_light_outside_its_box() {
+    let dir = cornell_with_sidecar(
+        "light-outside",
+        "[light]\nnode = \"CeilingLight\"\nmin = [0, 0, 0]\nmax = [0.1, 0.1, 0.1]\n",
+    );
+    let message = load_err(&dir);
+    assert!(message.contains("outside the box"), "{message}");
+}

@@ -1,0 +1,37 @@
+//! `rrf info SCENE`: the summary a user sees, and the errors for bad paths.
+
+mod common;
+
+use common::rrf;
+
+#[test]
+fn many_objects_summary_as_json() {
+    let out = rrf(&["info", "scenes/many-objects", "--json"], &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(stdout.lines().count(), 1, "--json prints one line");
+    let info: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert!(info["objects"].as_u64().unwrap() >= 24, "{info}");
+    assert!(info["triangles"].as_u64().unwrap() >= 50_000, "{info}");
+    assert_eq!(info["lights"].as_u64(), Some(1));
+    assert_eq!(info["moving_light"]["node"], "Lamp");
+}
+
+#[test]
+fn cornell_box_summary_as_text() {
+    let out = rrf(&["info", "scenes/cornell-box"], &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    for expected in ["8 objects, 36 triangles", "TallBlock", "CeilingLight", "radiance [17.0, 12.0, 4.0]", "front"] {
+        assert!(text.contains(expected), "missing {expected:?} in\n{text}");
+    }
+}
+
+#[test]
+fn missing_scene_is_a_clear_error() {
+    let out = rrf(&["info", "scenes/no-such-scene"], &[]);
+    assert_eq!(out.status.code(), Some(1));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.starts_with("error: scenes/no-such-scene: no such file or folder"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

@@ -1,0 +1,224 @@
+//! Writes a plain glTF 2.0 scene (`scene.gltf`, `scene.bin`, PNG textures) that Blender opens.
+
+use std::path::Path;
+
+use glam::{Mat3, Quat, Vec3};
+use serde_json::{json, Value};
+
+use super::shapes::Mesh;
+
+#[derive(Clone)]
+pub struct MaterialDesc {
+    pub name: &'static str,
+    /// Linear RGB.
+    pub base_color: [f32; 3],
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Emitted radiance, linear RGB (written as a factor with its maximum at 1, times
+    /// `KHR_materials_emissive_strength`).
+    pub emission: [f32; 3],
+    /// A PNG written beside the glTF, used as the base colour texture.
+    pub texture: Option<(&'static str, image::RgbaImage)>,
+}
+
+impl MaterialDesc {
+    pub fn diffuse(name: &'static str, base_color: [f32; 3]) -> Self {
+        Self { name, base_color, metallic: 0.0, roughness: 1.0, emission: [0.0; 3], texture: None }
+    }
+
+    pub fn glossy(name: &'static str, base_color: [f32; 3], metallic: f32, roughness: f32) -> Self {
+        Self { metallic, roughness, ..Self::diffuse(name, base_color) }
+    }
+
+    pub fn emissive(name: &'static str, radiance: [f32; 3]) -> Self {
+        Self { emission: radiance, ..Self::diffuse(name, [0.0; 3]) }
+    }
+
+    pub fn textured(name: &'static str, file: &'static str, image: image::RgbaImage) -> Self {
+        Self { texture: Some((file, image)), ..Self::diffuse(name, [1.0; 3]) }
+    }
+}
+
+#[derive(Default)]
+pub struct GltfBuilder {
+    bin: Vec<u8>,
+    views: Vec<Value>,
+    accessors: Vec<Value>,
+    meshes: Vec<Value>,
+    nodes: Vec<Value>,
+    materials: Vec<Value>,
+    images: Vec<Value>,
+    textures: Vec<Value>,
+    cameras: Vec<Value>,
+    lights: Vec<Value>,
+    pngs: Vec<(&'static str, image::RgbaImage)>,
+    pub triangles: usize,
+}
+
+impl GltfBuilder {
+    pub fn material(&mut self, m: MaterialDesc) -> usize {
+        let mut pbr = json!({
+            "baseColorFactor": [m.base_color[0], m.base_color[1], m.base_color[2], 1.0],
+            "metallicFactor": m.metallic,
+            "roughnessFactor": m.roughness,
+        });
+        if let Some((file, image)) = m.texture {
+            let index = self.textures.len();
+            self.images.push(json!({ "uri": file }));
+            self.textures.push(json!({ "source": self.images.len() - 1, "sampler": 0 }));
+            self.pngs.push((file, image));
+            pbr["baseColorTexture"] = json!({ "index": index });
+        }
+        let mut material = json!({ "name": m.name, "pbrMetallicRoughness": pbr });
+        let strength = m.emission.iter().copied().fold(0.0f32, f32::max);
+        if strength > 0.0 {
+            material["emissiveFactor"] = json!(m.emission.map(|c| c / strength));
+            if strength != 1.0 {
+                material["extensions"] = json!({ "KHR_materials_emissive_strength": { "emissiveStrength": strength } });
+            }
+        }
+        self.materials.push(material);
+        self.materials.len() - 1
+    }
+
+    /// Adds `mesh` as a node of its own, named `name`, at `translation`.
+    pub fn object(&mut self, name: &str, mesh: &Mesh, material: usize, translation: Vec3) -> usize {
+        assert_eq!(mesh.positions.len(), mesh.normals.len());
+        self.triangles += mesh.triangle_count();
+        let (lo, hi) = mesh
+            .positions
+            .iter()
+            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
+        let n = mesh.positions.len();
+        let positions = self.accessor(bytes_of(&mesh.positions), n, "VEC3", 5126, Some((lo, hi)), 34962);
+        let normals = self.accessor(bytes_of(&mesh.normals), n, "VEC3", 5126, None, 34962);
+        let uvs = self.accessor(bytes_of(&mesh.uvs), n, "VEC2", 5126, None, 34962);
+        let index_bytes: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+        let indices = self.accessor(index_bytes, mesh.indices.len(), "SCALAR", 5125, None, 34963);
+        self.meshes.push(json!({
+            "name": name,
+            "primitives": [{
+                "attributes": { "POSITION": positions, "NORMAL": normals, "TEXCOORD_0": uvs },
+                "indices": indices,
+                "material": material,
+            }],
+        }));
+        self.node(json!({ "name": name, "mesh": self.meshes.len() - 1, "translation": translation.to_array() }))
+    }
+
+    /// A KHR_lights_punctual point light; `intensity` is radiant intensity, W/sr per channel.
+    pub fn point_light(&mut self, name: &str, position: Vec3, intensity: [f32; 3]) -> usize {
+        let strength = intensity.iter().copied().fold(0.0f32, f32::max);
+        self.lights.push(json!({
+            "name": name,
+            "type": "point",
+            "color": intensity.map(|c| c / strength),
+            "intensity": strength,
+        }));
+        self.node(json!({
+            "name": name,
+            "translation": position.to_array(),
+            "extensions": { "KHR_lights_punctual": { "light": self.lights.len() - 1 } },
+        }))
+    }
+
+    /// A perspective camera at `eye` looking at `target` (glTF cameras look down -Z).
+    pub fn camera(&mut self, name: &str, eye: Vec3, target: Vec3, fov_y_degrees: f32) -> usize {
+        let forward = (target - eye).normalize();
+        let right = forward.cross(Vec3::Y).normalize();
+        let rotation = Quat::from_mat3(&Mat3::from_cols(right, right.cross(forward), -forward)).normalize();
+        self.cameras.push(json!({
+            "name": name,
+            "type": "perspective",
+            "perspective": { "yfov": fov_y_degrees.to_radians(), "znear": 0.01 },
+        }));
+        self.node(json!({
+            "name": name,
+            "camera": self.cameras.len() - 1,
+            "translation": eye.to_array(),
+            "rotation": rotation.to_array(),
+        }))
+    }
+
+    fn node(&mut self, node: Value) -> usize {
+        self.nodes.push(node);
+        self.nodes.len() - 1
+    }
+
+    fn accessor(
+        &mut self,
+        bytes: Vec<u8>,
+        count: usize,
+        kind: &str,
+        component: u32,
+        bounds: Option<(Vec3, Vec3)>,
+        target: u32,
+    ) -> usize {
+        while !self.bin.len().is_multiple_of(4) {
+            self.bin.push(0);
+        }
+        self.views.push(json!({
+            "buffer": 0, "byteOffset": self.bin.len(), "byteLength": bytes.len(), "target": target,
+        }));
+        self.bin.extend(bytes);
+        let mut accessor =
+            json!({ "bufferView": self.views.len() - 1, "componentType": component, "count": count, "type": kind });
+        if let Some((lo, hi)) = bounds {
+            accessor["min"] = json!(lo.to_array());
+            accessor["max"] = json!(hi.to_array());
+        }
+        self.accessors.push(accessor);
+        self.accessors.len() - 1
+    }
+
+    pub fn write(self, dir: &Path) -> Result<(), String> {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        let mut used = vec![];
+        if !self.lights.is_empty() {
+            used.push("KHR_lights_punctual");
+        }
+        if self.materials.iter().any(|m| m.get("extensions").is_some()) {
+            used.push("KHR_materials_emissive_strength");
+        }
+        let mut root = json!({
+            "asset": { "version": "2.0", "generator": "rrf xtask scenes" },
+            "scene": 0,
+            "scenes": [{ "nodes": (0..self.nodes.len()).collect::<Vec<_>>() }],
+            "nodes": self.nodes,
+            "meshes": self.meshes,
+            "materials": self.materials,
+            "accessors": self.accessors,
+            "bufferViews": self.views,
+            "buffers": [{ "uri": "scene.bin", "byteLength": self.bin.len() }],
+        });
+        if !used.is_empty() {
+            root["extensionsUsed"] = json!(used);
+        }
+        if !self.cameras.is_empty() {
+            root["cameras"] = json!(self.cameras);
+        }
+        if !self.lights.is_empty() {
+            root["extensions"] = json!({ "KHR_lights_punctual": { "lights": self.lights } });
+        }
+        if !self.images.is_empty() {
+            root["images"] = json!(self.images);
+            root["textures"] = json!(self.textures);
+            // Linear filtering with mipmaps, repeat wrapping.
+            root["samplers"] = json!([{ "magFilter": 9729, "minFilter": 9987, "wrapS": 10497, "wrapT": 10497 }]);
+        }
+        let text = serde_json::to_string_pretty(&root).map_err(|e| e.to_string())?;
+        let write = |name: &str, bytes: &[u8]| {
+            std::fs::write(dir.join(name), bytes).map_err(|e| format!("{}: {e}", dir.join(name).display()))
+        };
+        write("scene.gltf", text.as_bytes())?;
+        write("scene.bin", &self.bin)?;
+        for (file, image) in &self.pngs {
+            image.save(dir.join(file)).map_err(|e| format!("{}: {e}", dir.join(file).display()))?;
+        }
+        Ok(())
+    }
+}
+
+fn bytes_of<T: Copy + Into<[f32; N]>, const N: usize>(values: &[T]) -> Vec<u8> {
+    values.iter().flat_map(|&v| v.into()).flat_map(f32::to_le_bytes).collect()
+}
