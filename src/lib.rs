@@ -5,4 +5,6 @@
 //! (Vulkan). This crate owns the compiled shaders and hands them to the renderer.
 
 pub mod commands;
+pub mod image_out;
+pub mod progress;
 pub mod shaders;

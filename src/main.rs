@@ -27,12 +27,19 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+
+    /// Path-trace ground truth on the CPU, by component (emitted, direct, indirect, or all).
+    ///
+    /// Uses all cores. The same seed gives the same image. EXR output is linear radiance;
+    /// PNG output is tonemapped (exposure, ACES, sRGB) like the renderer's.
+    Reference(rrf::commands::reference::ReferenceArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info { scene, json } => rrf::commands::info::run(scene.as_deref(), json),
+        Command::Reference(args) => rrf::commands::reference::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

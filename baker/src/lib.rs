@@ -2,4 +2,5 @@
 //! No Vulkan here.
 
 pub mod scene;
+pub mod trace;
 pub use glam;

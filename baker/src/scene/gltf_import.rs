@@ -18,7 +18,8 @@ use super::texture::{ColorSpace, Texture};
 use super::{LightKind, Material, MovingLight, Object, Part, PointLight, Scene, View};
 
 /// Extensions a file may list in `extensionsRequired`.
-const SUPPORTED_EXTENSIONS: &[&str] = &["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+const SUPPORTED_EXTENSIONS: &[&str] =
+    &["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular"];
 
 pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> Result<Scene, SceneError> {
     let err = |element: &str, problem: String| SceneError::new(file, element, problem);
@@ -82,6 +83,7 @@ pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> 
             roughness: 1.0,
             metallic_roughness_texture: None,
             emission: Vec3::ZERO,
+            specular: 1.0,
             double_sided: false,
         });
     }
@@ -297,6 +299,7 @@ impl Importer<'_> {
             roughness: pbr.roughness_factor().clamp(0.0, 1.0),
             metallic_roughness_texture,
             emission: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+            specular: m.specular().map_or(1.0, |s| s.specular_factor().clamp(0.0, 1.0)),
             double_sided: m.double_sided(),
             name,
         }

@@ -84,6 +84,9 @@ pub struct Material {
     pub metallic_roughness_texture: Option<u32>,
     /// Emitted radiance (linear RGB).
     pub emission: Vec3,
+    /// `KHR_materials_specular` factor (1 without the extension): scales the dielectric
+    /// specular lobe; 0 leaves pure Lambert diffuse.
+    pub specular: f32,
     pub double_sided: bool,
 }
 

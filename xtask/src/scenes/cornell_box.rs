@@ -1,5 +1,7 @@
 //! The Cornell box, from the measured data published by the Cornell Program of Computer
 //! Graphics (geometry in millimetres there, metres here), with the usual RGB reflectances.
+//! The walls and blocks are pure Lambert (`KHR_materials_specular` factor 0), as in the
+//! original and in other renderers' versions of it.
 
 use glam::{Vec2, Vec3};
 
@@ -12,9 +14,9 @@ fn mm(x: f32, y: f32, z: f32) -> Vec3 {
 
 pub fn build() -> (GltfBuilder, String) {
     let mut b = GltfBuilder::default();
-    let white = b.material(MaterialDesc::diffuse("white", [0.725, 0.71, 0.68]));
-    let red = b.material(MaterialDesc::diffuse("red", [0.63, 0.065, 0.05]));
-    let green = b.material(MaterialDesc::diffuse("green", [0.14, 0.45, 0.091]));
+    let white = b.material(MaterialDesc::lambert("white", [0.725, 0.71, 0.68]));
+    let red = b.material(MaterialDesc::lambert("red", [0.63, 0.065, 0.05]));
+    let green = b.material(MaterialDesc::lambert("green", [0.14, 0.45, 0.091]));
     let light = b.material(MaterialDesc::emissive("light", [17.0, 12.0, 4.0]));
     let inside = mm(278.0, 274.4, 279.6);
     let wall = |corners: [Vec3; 4]| {

@@ -19,11 +19,18 @@ pub struct MaterialDesc {
     pub emission: [f32; 3],
     /// A PNG written beside the glTF, used as the base colour texture.
     pub texture: Option<(&'static str, image::RgbaImage)>,
+    /// `KHR_materials_specular` factor; `Some(0.0)` makes a pure Lambert surface.
+    pub specular: Option<f32>,
 }
 
 impl MaterialDesc {
     pub fn diffuse(name: &'static str, base_color: [f32; 3]) -> Self {
-        Self { name, base_color, metallic: 0.0, roughness: 1.0, emission: [0.0; 3], texture: None }
+        Self { name, base_color, metallic: 0.0, roughness: 1.0, emission: [0.0; 3], texture: None, specular: None }
+    }
+
+    /// Pure Lambert: no specular lobe at all.
+    pub fn lambert(name: &'static str, base_color: [f32; 3]) -> Self {
+        Self { specular: Some(0.0), ..Self::diffuse(name, base_color) }
     }
 
     pub fn glossy(name: &'static str, base_color: [f32; 3], metallic: f32, roughness: f32) -> Self {
@@ -70,12 +77,19 @@ impl GltfBuilder {
             pbr["baseColorTexture"] = json!({ "index": index });
         }
         let mut material = json!({ "name": m.name, "pbrMetallicRoughness": pbr });
+        let mut extensions = serde_json::Map::new();
         let strength = m.emission.iter().copied().fold(0.0f32, f32::max);
         if strength > 0.0 {
             material["emissiveFactor"] = json!(m.emission.map(|c| c / strength));
             if strength != 1.0 {
-                material["extensions"] = json!({ "KHR_materials_emissive_strength": { "emissiveStrength": strength } });
+                extensions.insert("KHR_materials_emissive_strength".into(), json!({ "emissiveStrength": strength }));
             }
+        }
+        if let Some(specular) = m.specular {
+            extensions.insert("KHR_materials_specular".into(), json!({ "specularFactor": specular }));
+        }
+        if !extensions.is_empty() {
+            material["extensions"] = Value::Object(extensions);
         }
         self.materials.push(material);
         self.materials.len() - 1
@@ -177,8 +191,10 @@ impl GltfBuilder {
         if !self.lights.is_empty() {
             used.push("KHR_lights_punctual");
         }
-        if self.materials.iter().any(|m| m.get("extensions").is_some()) {
-            used.push("KHR_materials_emissive_strength");
+        for ext in ["KHR_materials_emissive_strength", "KHR_materials_specular"] {
+            if self.materials.iter().any(|m| m.get("extensions").and_then(|e| e.get(ext)).is_some()) {
+                used.push(ext);
+            }
         }
         let mut root = json!({
             "asset": { "version": "2.0", "generator": "rrf xtask scenes" },

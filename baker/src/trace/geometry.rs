@@ -1,0 +1,145 @@
+//! The scene's triangles in one CWBVH (obvhs), built once per scene.
+//!
+//! The moving area light, if there is one, stays out of the BVH: it is a handful of
+//! triangles tested directly, so moving it never rebuilds the BVH.
+
+use glam::{Vec2, Vec3, Vec3A};
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::rt_triangle::RtTriangle;
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+
+use crate::scene::{LightKind, Scene};
+
+/// A triangle's vertices (indices into the global vertex arrays), object and material.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleInfo {
+    pub vertices: [u32; 3],
+    pub object: u32,
+    pub material: u32,
+}
+
+pub struct Geometry {
+    bvh: CwBvh,
+    /// Triangles in BVH leaf order, so that traversal indexes them directly.
+    bvh_triangles: Vec<RtTriangle>,
+    /// BVH leaf order to triangle id.
+    bvh_ids: Vec<u32>,
+    /// Every triangle of the scene, by id.
+    pub triangles: Vec<TriangleInfo>,
+    /// World-space vertices of all objects (the moving light at its default position).
+    pub positions: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub uvs: Vec<Vec2>,
+    /// Triangle ids of the moving area light, not in the BVH.
+    pub moving: Vec<u32>,
+}
+
+/// The closest intersection along a ray.
+#[derive(Clone, Copy, Debug)]
+pub struct Hit {
+    pub t: f32,
+    pub triangle: u32,
+}
+
+impl Geometry {
+    pub fn new(scene: &Scene) -> Self {
+        let moving_object = match scene.moving_light.as_ref().map(|l| l.kind) {
+            Some(LightKind::Area(id)) => Some(id),
+            _ => None,
+        };
+        let mut g = Geometry {
+            bvh: CwBvh::default(),
+            bvh_triangles: Vec::new(),
+            bvh_ids: Vec::new(),
+            triangles: Vec::with_capacity(scene.triangle_count()),
+            positions: Vec::new(),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            moving: Vec::new(),
+        };
+        for object in &scene.objects {
+            let base = g.positions.len() as u32;
+            g.positions.extend(&object.positions);
+            g.normals.extend(&object.normals);
+            g.uvs.extend(&object.uvs);
+            for part in &object.parts {
+                for t in part.triangles.clone() {
+                    let id = g.triangles.len() as u32;
+                    if Some(object.id) == moving_object {
+                        g.moving.push(id);
+                    }
+                    g.triangles.push(TriangleInfo {
+                        vertices: object.triangles[t as usize].map(|i| base + i),
+                        object: object.id,
+                        material: part.material,
+                    });
+                }
+            }
+        }
+        let static_ids: Vec<u32> = (0..g.triangles.len() as u32).filter(|id| !g.moving.contains(id)).collect();
+        let tris: Vec<Triangle> = static_ids
+            .iter()
+            .map(|&id| {
+                let [a, b, c] = g.corners(id, Vec3::ZERO);
+                Triangle { v0: a.into(), v1: b.into(), v2: c.into() }
+            })
+            .collect();
+        if !tris.is_empty() {
+            g.bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut Default::default());
+            g.bvh_ids = g.bvh.primitive_indices.iter().map(|&i| static_ids[i as usize]).collect();
+            g.bvh_triangles = g.bvh.primitive_indices.iter().map(|&i| RtTriangle::from(&tris[i as usize])).collect();
+        }
+        g
+    }
+
+    /// The triangle's corners, the moving light's moved by `offset`.
+    pub fn corners(&self, id: u32, offset: Vec3) -> [Vec3; 3] {
+        let info = &self.triangles[id as usize];
+        let shift = if self.moving.contains(&id) { offset } else { Vec3::ZERO };
+        info.vertices.map(|v| self.positions[v as usize] + shift)
+    }
+
+    /// The moving light's triangles for a light `offset` from its default position.
+    pub fn moved_triangles(&self, offset: Vec3) -> Vec<(u32, RtTriangle)> {
+        self.moving
+            .iter()
+            .map(|&id| {
+                let [a, b, c] = self.corners(id, offset);
+                (id, RtTriangle::new(a.into(), b.into(), c.into()))
+            })
+            .collect()
+    }
+
+    /// Closest hit in `[tmin, tmax]` against the BVH and the moved light triangles.
+    pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[(u32, RtTriangle)]) -> Option<Hit> {
+        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
+        let mut hit = RayHit::none();
+        let mut best: Option<Hit> = None;
+        if !self.bvh_triangles.is_empty()
+            && self.bvh.ray_traverse(ray, &mut hit, |r, i| self.bvh_triangles[i].intersect(r))
+        {
+            best = Some(Hit { t: hit.t, triangle: self.bvh_ids[hit.primitive_id as usize] });
+        }
+        for (id, tri) in moved {
+            let limit = best.map_or(tmax, |h| h.t);
+            let t = tri.intersect(&Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, limit));
+            if t < limit {
+                best = Some(Hit { t, triangle: *id });
+            }
+        }
+        best
+    }
+
+    /// Whether anything lies between `origin` and `origin + dir · tmax`.
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[(u32, RtTriangle)]) -> bool {
+        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
+        if !self.bvh_triangles.is_empty() && !self.bvh.ray_traverse_miss(ray, |r, i| self.bvh_triangles[i].intersect(r))
+        {
+            return true;
+        }
+        moved.iter().any(|(_, tri)| tri.intersect(&ray) < tmax)
+    }
+}

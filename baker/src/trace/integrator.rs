@@ -1,0 +1,190 @@
+//! Path tracing with next-event estimation and multiple importance sampling, keeping the
+//! light that reaches a surface point apart by how it got there.
+//!
+//! For the first surface point x seen along a ray, with paths counted in segments from the
+//! viewer (Mitsuba's `max_depth` convention):
+//! - **emitted**: x's own emission (1 segment);
+//! - **direct**: light that left a light source and reached x with no other bounce (2
+//!   segments: next-event estimation at x, and BSDF-sampled rays from x that hit an emitter);
+//! - **indirect**: everything else (3 segments or more).
+//!
+//! The three are disjoint sets of path contributions of one estimator, so they sum to the
+//! full radiance of the same paths.
+
+use glam::Vec3;
+
+use super::sampling::{Frame, Rng};
+use super::world::{Interaction, World};
+
+#[derive(Clone, Copy, Debug)]
+pub struct TraceSettings {
+    /// Longest path in segments from the viewer: 1 shows emitters only, 2 adds direct light.
+    pub max_depth: u32,
+    /// Russian roulette from this many segments on; `None` turns it off (exact expectations
+    /// for tests).
+    pub rr_depth: Option<u32>,
+}
+
+impl Default for TraceSettings {
+    fn default() -> Self {
+        TraceSettings { max_depth: 8, rr_depth: Some(5) }
+    }
+}
+
+/// Radiance leaving a surface point, by component.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Radiance {
+    pub emitted: Vec3,
+    pub direct: Vec3,
+    pub indirect: Vec3,
+}
+
+impl Radiance {
+    pub fn gi(&self) -> Vec3 {
+        self.emitted + self.direct + self.indirect
+    }
+
+    fn add(&mut self, segments: u32, value: Vec3) {
+        if !value.is_finite() {
+            return;
+        }
+        match segments {
+            0 | 1 => self.emitted += value,
+            2 => self.direct += value,
+            _ => self.indirect += value,
+        }
+    }
+
+    pub fn scaled(self, s: f32) -> Self {
+        Radiance { emitted: self.emitted * s, direct: self.direct * s, indirect: self.indirect * s }
+    }
+}
+
+impl std::ops::AddAssign for Radiance {
+    fn add_assign(&mut self, o: Self) {
+        self.emitted += o.emitted;
+        self.direct += o.direct;
+        self.indirect += o.indirect;
+    }
+}
+
+/// Power heuristic (β = 2) weight of a strategy with density `a` against one with `b`.
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}
+
+/// A ray origin just off the surface on the side that `dir` leaves towards.
+pub fn offset_origin(si: &Interaction, dir: Vec3) -> Vec3 {
+    let eps = 1e-4 * (1.0 + si.position.abs().max_element());
+    let side = if dir.dot(si.geometric_normal) >= 0.0 { 1.0 } else { -1.0 };
+    si.position + si.geometric_normal * (eps * side)
+}
+
+/// Radiance along a camera ray: emitted, direct and indirect at its first hit.
+pub fn trace_ray(world: &World, origin: Vec3, dir: Vec3, settings: &TraceSettings, rng: &mut Rng) -> Radiance {
+    match world.intersect(origin, dir) {
+        Some(hit) => {
+            let si = world.interaction(origin, dir, hit);
+            radiance_leaving(world, &si, -dir, settings, rng)
+        }
+        None => Radiance::default(),
+    }
+}
+
+/// One path-traced estimate of the radiance leaving `first` towards `wo` (unit, pointing
+/// away from the surface).
+pub fn radiance_leaving(
+    world: &World,
+    first: &Interaction,
+    wo: Vec3,
+    settings: &TraceSettings,
+    rng: &mut Rng,
+) -> Radiance {
+    let mut out = Radiance::default();
+    if settings.max_depth >= 1 {
+        out.emitted = first.emission;
+    }
+    let mut beta = Vec3::ONE;
+    let mut wo = wo;
+    let mut segments = 1;
+    let mut current: Option<Interaction> = None;
+    while segments < settings.max_depth {
+        let si = current.as_ref().unwrap_or(first);
+        let frame = Frame::new(si.shading_normal);
+        let wo_local = frame.to_local(wo);
+        if wo_local.z <= 0.0 {
+            break;
+        }
+
+        // Next-event estimation: a path one segment longer.
+        if world.has_area_lights() {
+            if let Some(light) = world.sample_area_light(si.position, rng.next_f32(), rng.next_vec2()) {
+                let wi = frame.to_local(light.direction);
+                let f = si.bsdf.eval(wo_local, wi);
+                if f != Vec3::ZERO && light.direction.dot(si.geometric_normal) > 0.0 {
+                    let origin = offset_origin(si, light.direction);
+                    if !world.occluded(origin, light.direction, light.distance * (1.0 - 1e-3)) {
+                        let pdf = light.pdf.unwrap_or(1.0);
+                        let weight = power_heuristic(pdf, si.bsdf.pdf(wo_local, wi));
+                        out.add(segments + 1, beta * f * light.radiance * (wi.z * weight / pdf));
+                    }
+                }
+            }
+        }
+        for light in &world.point_lights {
+            let to_light = light.position - si.position;
+            let distance2 = to_light.length_squared();
+            let distance = distance2.sqrt();
+            let direction = to_light / distance;
+            if direction.dot(si.geometric_normal) <= 0.0 {
+                continue;
+            }
+            let wi = frame.to_local(direction);
+            let f = si.bsdf.eval(wo_local, wi);
+            if f == Vec3::ZERO {
+                continue;
+            }
+            let origin = offset_origin(si, direction);
+            if !world.occluded(origin, direction, distance * (1.0 - 1e-4)) {
+                out.add(segments + 1, beta * f * light.intensity * (wi.z / distance2));
+            }
+        }
+
+        // Continue the path by sampling the BSDF.
+        let Some(sample) = si.bsdf.sample(wo_local, rng.next_f32(), rng.next_vec2()) else {
+            break;
+        };
+        let wi = frame.to_world(sample.wi);
+        if wi.dot(si.geometric_normal) <= 0.0 {
+            break;
+        }
+        beta *= sample.weight;
+        let origin = offset_origin(si, wi);
+        let Some(hit) = world.intersect(origin, wi) else {
+            break;
+        };
+        let next = world.interaction(origin, wi, hit);
+        segments += 1;
+        if next.emission != Vec3::ZERO {
+            let light_pdf = world.area_light_pdf(hit.triangle, wi, hit.t);
+            out.add(segments, beta * next.emission * power_heuristic(sample.pdf, light_pdf));
+        }
+        if let Some(rr_depth) = settings.rr_depth {
+            if segments >= rr_depth {
+                let survive = beta.max_element().min(0.95);
+                if rng.next_f32() >= survive {
+                    break;
+                }
+                beta /= survive;
+            }
+        }
+        current = Some(next);
+        wo = -wi;
+    }
+    out
+}

@@ -1,0 +1,15 @@
+//! The reference path tracer: the source of training data and the ground truth.
+
+pub mod bsdf;
+pub mod camera;
+pub mod geometry;
+pub mod integrator;
+pub mod render;
+pub mod sampling;
+pub mod world;
+
+pub use camera::Camera;
+pub use geometry::Geometry;
+pub use integrator::{Radiance, TraceSettings};
+pub use render::{render, RadianceImage, RenderSettings};
+pub use world::World;

@@ -1,0 +1,78 @@
+//! Path-traced images: tiles on all cores through rayon, the same image for the same seed.
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use super::camera::Camera;
+use super::integrator::{trace_ray, Radiance, TraceSettings};
+use super::sampling::Rng;
+use super::world::World;
+
+const TILE: u32 = 16;
+
+#[derive(Clone, Copy, Debug)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub trace: TraceSettings,
+    pub seed: u64,
+}
+
+/// An image of per-pixel radiance by component, rows top to bottom.
+pub struct RadianceImage {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<Radiance>,
+}
+
+impl RadianceImage {
+    /// One component (or the sum) as RGB rows.
+    pub fn component(&self, pick: impl Fn(&Radiance) -> Vec3) -> Vec<Vec3> {
+        self.pixels.iter().map(pick).collect()
+    }
+}
+
+/// Renders `camera`'s view of `world`. `progress` is called with the number of pixels of each
+/// finished tile, from worker threads.
+pub fn render(world: &World, camera: &Camera, s: &RenderSettings, progress: &(dyn Fn(u64) + Sync)) -> RadianceImage {
+    let tiles_x = s.width.div_ceil(TILE);
+    let tiles_y = s.height.div_ceil(TILE);
+    let tiles: Vec<(u32, Vec<Radiance>)> = (0..tiles_x * tiles_y)
+        .into_par_iter()
+        .map(|tile| {
+            let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
+            let (x1, y1) = ((x0 + TILE).min(s.width), (y0 + TILE).min(s.height));
+            let mut pixels = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    pixels.push(render_pixel(world, camera, s, x, y));
+                }
+            }
+            progress(pixels.len() as u64);
+            (tile, pixels)
+        })
+        .collect();
+
+    let mut image = vec![Radiance::default(); (s.width * s.height) as usize];
+    for (tile, pixels) in tiles {
+        let (x0, y0) = ((tile % tiles_x) * TILE, (tile / tiles_x) * TILE);
+        let w = (x0 + TILE).min(s.width) - x0;
+        for (i, p) in pixels.into_iter().enumerate() {
+            let (x, y) = (x0 + i as u32 % w, y0 + i as u32 / w);
+            image[(y * s.width + x) as usize] = p;
+        }
+    }
+    RadianceImage { width: s.width, height: s.height, pixels: image }
+}
+
+fn render_pixel(world: &World, camera: &Camera, s: &RenderSettings, x: u32, y: u32) -> Radiance {
+    let mut rng = Rng::new(s.seed, u64::from(y) * u64::from(s.width) + u64::from(x));
+    let mut sum = Radiance::default();
+    let size = Vec2::new(s.width as f32, s.height as f32);
+    for _ in 0..s.spp {
+        let film = (Vec2::new(x as f32, y as f32) + rng.next_vec2()) / size;
+        sum += trace_ray(world, camera.eye, camera.direction(film), &s.trace, &mut rng);
+    }
+    sum.scaled(1.0 / s.spp.max(1) as f32)
+}

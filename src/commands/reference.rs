@@ -1,0 +1,104 @@
+//! `rrf reference`: path-traced ground truth, by component.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Result;
+use clap::Args;
+use rrf_baker::scene::Scene;
+use rrf_baker::trace::{render, Camera, Geometry, RenderSettings, TraceSettings, World};
+use serde_json::json;
+
+use super::view_args::{Component, ViewArgs};
+use crate::image_out::write_image;
+use crate::progress::Progress;
+
+#[derive(Args, Debug)]
+pub struct ReferenceArgs {
+    #[command(flatten)]
+    pub view: ViewArgs,
+    /// Samples (paths) per pixel.
+    #[arg(long, default_value_t = 64)]
+    pub spp: u32,
+    /// Longest path in segments from the camera: 1 shows emitters only, 2 adds direct light.
+    #[arg(long, default_value_t = 8)]
+    pub max_depth: u32,
+    /// Russian roulette from this many segments on; 0 turns it off.
+    #[arg(long, default_value_t = 5)]
+    pub rr_depth: u32,
+    /// Which light to show.
+    #[arg(long, value_enum, default_value_t = Component::Gi)]
+    pub component: Component,
+    /// Random seed: the same seed gives the same image.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output: .exr (linear HDR) or .png (tonemapped).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Print one line of JSON with timings and throughput.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: &ReferenceArgs) -> Result<()> {
+    let (width, height) = args.view.size()?;
+    if args.spp == 0 {
+        anyhow::bail!("--spp must be at least 1");
+    }
+    let scene = Scene::load(&args.view.scene)?;
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let view = args.view.resolve_view(&scene)?;
+    let light = args.view.light_position(&scene)?;
+    let geometry = Geometry::new(&scene);
+    let world = World::new(&scene, &geometry, light);
+    let camera = Camera::new(&view, width as f32 / height as f32);
+    let settings = RenderSettings {
+        width,
+        height,
+        spp: args.spp,
+        trace: TraceSettings { max_depth: args.max_depth, rr_depth: (args.rr_depth > 0).then_some(args.rr_depth) },
+        seed: args.seed,
+    };
+
+    let progress = Progress::new(u64::from(width) * u64::from(height), "path tracing", args.json);
+    let start = Instant::now();
+    let image = render(&world, &camera, &settings, &|n| progress.inc(n));
+    let seconds = start.elapsed().as_secs_f64();
+    progress.finish();
+
+    let pixels = image.component(|r| args.component.pick(r));
+    write_image(&args.output, width, height, &pixels, args.view.exposure)?;
+    let paths = u64::from(width) * u64::from(height) * u64::from(args.spp);
+    let summary = json!({
+        "scene": scene.name,
+        "view": view.name,
+        "output": args.output,
+        "width": width,
+        "height": height,
+        "spp": args.spp,
+        "max_depth": args.max_depth,
+        "component": format!("{:?}", args.component).to_lowercase(),
+        "seed": args.seed,
+        "paths": paths,
+        "seconds": seconds,
+        "paths_per_s": paths as f64 / seconds,
+        "threads": rayon_threads(),
+    });
+    if args.json {
+        println!("{summary}");
+    } else {
+        eprintln!(
+            "wrote {} ({width}x{height}, {} spp) in {seconds:.2} s, {:.2} M paths/s",
+            args.output.display(),
+            args.spp,
+            paths as f64 / seconds / 1e6
+        );
+    }
+    Ok(())
+}
+
+fn rayon_threads() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}

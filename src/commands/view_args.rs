@@ -1,0 +1,124 @@
+//! Options shared by the commands that make an image: which view, where the light is, how big.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use rrf_baker::glam::Vec3;
+use rrf_baker::scene::{Scene, View};
+use rrf_baker::trace::Radiance;
+
+#[derive(Args, Clone, Debug)]
+pub struct ViewArgs {
+    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    pub scene: PathBuf,
+    /// A named view from the scene (see `rrf info SCENE`); default: the glTF camera.
+    #[arg(long, conflicts_with = "camera")]
+    pub view: Option<String>,
+    /// Camera as EYE:TARGET, each x,y,z in metres, e.g. 0.28,0.27,-0.8:0.28,0.27,0; the
+    /// field of view is the default view's.
+    #[arg(long, value_name = "EYE:TARGET")]
+    pub camera: Option<String>,
+    /// Position of the scene's moving light, x,y,z in metres; default: where the glTF puts it.
+    #[arg(long, value_name = "X,Y,Z")]
+    pub light: Option<String>,
+    /// Image size in pixels.
+    #[arg(long, default_value = "256x256", value_name = "WxH")]
+    pub size: String,
+    /// Exposure in stops for PNG output (EXR is always linear).
+    #[arg(long, default_value_t = 0.0)]
+    pub exposure: f32,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Component {
+    /// Everything: emitted + direct + indirect.
+    Gi,
+    /// Light that reached the surface straight from a light source.
+    Direct,
+    /// Light that bounced at least once before reaching the surface.
+    Indirect,
+    /// The surface's own emission.
+    Emitted,
+}
+
+impl Component {
+    pub fn pick(self, r: &Radiance) -> Vec3 {
+        match self {
+            Component::Gi => r.gi(),
+            Component::Direct => r.direct,
+            Component::Indirect => r.indirect,
+            Component::Emitted => r.emitted,
+        }
+    }
+}
+
+pub fn parse_vec3(text: &str, what: &str) -> Result<Vec3> {
+    let parts: Vec<&str> = text.split(',').collect();
+    if parts.len() != 3 {
+        bail!("{what} {text:?}: expected x,y,z");
+    }
+    let mut v = [0.0f32; 3];
+    for (slot, part) in v.iter_mut().zip(&parts) {
+        *slot = part.trim().parse().with_context(|| format!("{what} {text:?}: {part:?} is not a number"))?;
+        if !slot.is_finite() {
+            bail!("{what} {text:?}: {part:?} is not finite");
+        }
+    }
+    Ok(Vec3::from(v))
+}
+
+impl ViewArgs {
+    pub fn size(&self) -> Result<(u32, u32)> {
+        let parse = || -> Option<(u32, u32)> {
+            let (w, h) = self.size.split_once(['x', 'X'])?;
+            Some((w.trim().parse().ok()?, h.trim().parse().ok()?))
+        };
+        match parse() {
+            Some((w, h)) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => Ok((w, h)),
+            _ => bail!("--size {:?}: expected WxH with each between 1 and 16384, e.g. 512x512", self.size),
+        }
+    }
+
+    /// The view to render: `--view`, `--camera`, or the scene's default.
+    pub fn resolve_view(&self, scene: &Scene) -> Result<View> {
+        let names = || scene.views.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ");
+        let default = match scene.views.first() {
+            Some(v) => v.clone(),
+            None => bail!("{}: the scene has no camera and no named views; use --camera", scene.gltf_path.display()),
+        };
+        if let Some(name) = &self.view {
+            return scene
+                .view(name)
+                .cloned()
+                .with_context(|| format!("--view {name:?}: no such view in {} (views: {})", scene.name, names()));
+        }
+        if let Some(text) = &self.camera {
+            let (eye, target) =
+                text.split_once(':').with_context(|| format!("--camera {text:?}: expected EYE:TARGET"))?;
+            let eye = parse_vec3(eye, "--camera eye")?;
+            let target = parse_vec3(target, "--camera target")?;
+            if eye.distance(target) < 1e-6 {
+                bail!("--camera {text:?}: eye and target are the same point");
+            }
+            return Ok(View { name: "camera".into(), eye, target, up: Vec3::Y, fov_y: default.fov_y });
+        }
+        Ok(default)
+    }
+
+    /// The moving light's position: `--light`, or `None` for the glTF's.
+    pub fn light_position(&self, scene: &Scene) -> Result<Option<Vec3>> {
+        let Some(text) = &self.light else { return Ok(None) };
+        let p = parse_vec3(text, "--light")?;
+        match &scene.moving_light {
+            None => bail!("--light: scene {} has no moving light (no [light] in its sidecar)", scene.name),
+            Some(light) if !light.bounds.contains(p) => eprintln!(
+                "warning: --light {text} is outside the light's box {:?} .. {:?}; the networks were not trained there",
+                light.bounds.min.to_array(),
+                light.bounds.max.to_array()
+            ),
+            Some(_) => {}
+        }
+        Ok(Some(p))
+    }
+}
