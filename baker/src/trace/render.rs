@@ -67,10 +67,12 @@ pub fn render(world: &World, camera: &Camera, s: &RenderSettings, progress: &(dy
 }
 
 fn render_pixel(world: &World, camera: &Camera, s: &RenderSettings, x: u32, y: u32) -> Radiance {
-    let mut rng = Rng::new(s.seed, u64::from(y) * u64::from(s.width) + u64::from(x));
+    let pixel = u64::from(y) * u64::from(s.width) + u64::from(x);
     let mut sum = Radiance::default();
     let size = Vec2::new(s.width as f32, s.height as f32);
-    for _ in 0..s.spp {
+    for sample in 0..s.spp {
+        // One stream per path, so that a path's length never shifts another path's numbers.
+        let mut rng = Rng::new(s.seed, pixel * u64::from(s.spp) + u64::from(sample));
         let film = (Vec2::new(x as f32, y as f32) + rng.next_vec2()) / size;
         sum += trace_ray(world, camera.eye, camera.direction(film), &s.trace, &mut rng);
     }

@@ -1,0 +1,332 @@
+//! The path tracer against closed-form answers: a white furnace, the closed sphere, a point
+//! light and a square area light over a Lambert plane; and the emitted/direct/indirect split.
+
+use std::f32::consts::PI;
+use std::path::{Path, PathBuf};
+
+use rrf_baker::glam::{Vec2, Vec3};
+use rrf_baker::scene::{BakePresets, Material, Object, Part, PointLight, Scene, View};
+use rrf_baker::trace::integrator::trace_ray;
+use rrf_baker::trace::sampling::Rng;
+use rrf_baker::trace::{render, Camera, Geometry, Radiance, RenderSettings, TraceSettings, World};
+
+fn material(base: f32, emission: f32) -> Material {
+    Material {
+        name: "m".into(),
+        base_color: Vec3::splat(base),
+        base_color_texture: None,
+        metallic: 0.0,
+        roughness: 1.0,
+        metallic_roughness_texture: None,
+        emission: Vec3::splat(emission),
+        specular: 0.0, // pure Lambert
+        double_sided: false,
+    }
+}
+
+struct Mesh {
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+/// A UV sphere; `inward` turns it inside out (normals and winding face the centre).
+fn sphere(center: Vec3, radius: f32, inward: bool) -> Mesh {
+    let (segments, rings) = (48u32, 24u32);
+    let mut m = Mesh { positions: vec![], normals: vec![], triangles: vec![] };
+    for j in 0..=rings {
+        for i in 0..=segments {
+            let (theta, phi) = (PI * j as f32 / rings as f32, 2.0 * PI * i as f32 / segments as f32);
+            let n = Vec3::new(theta.sin() * phi.cos(), theta.cos(), theta.sin() * phi.sin());
+            m.positions.push(center + radius * n);
+            m.normals.push(if inward { -n } else { n });
+        }
+    }
+    let row = segments + 1;
+    for j in 0..rings {
+        for i in 0..segments {
+            let (a, b, c, d) = (j * row + i, j * row + i + 1, (j + 1) * row + i + 1, (j + 1) * row + i);
+            for t in [[a, b, c], [a, c, d]] {
+                let [p, q, r] = t.map(|k| m.positions[k as usize]);
+                if (q - p).cross(r - p).length_squared() < 1e-12 {
+                    continue;
+                }
+                let outward = (q - p).cross(r - p).dot(p - center) > 0.0;
+                m.triangles.push(if outward != inward { t } else { [t[0], t[2], t[1]] });
+            }
+        }
+    }
+    m
+}
+
+/// An axis-aligned box; `inward` for an enclosure.
+fn cuboid(min: Vec3, max: Vec3, inward: bool) -> Mesh {
+    let mut m = Mesh { positions: vec![], normals: vec![], triangles: vec![] };
+    let c = (min + max) / 2.0;
+    for axis in 0..3 {
+        for side in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = side;
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            let corner = |su: f32, sv: f32| {
+                let mut p = c;
+                p[axis] = if side > 0.0 { max[axis] } else { min[axis] };
+                p[u] = if su > 0.0 { max[u] } else { min[u] };
+                p[v] = if sv > 0.0 { max[v] } else { min[v] };
+                p
+            };
+            let quad = [corner(-1.0, -1.0), corner(1.0, -1.0), corner(1.0, 1.0), corner(-1.0, 1.0)];
+            let facing = if inward { -n } else { n };
+            let base = m.positions.len() as u32;
+            m.positions.extend(quad);
+            m.normals.extend([facing; 4]);
+            let geometric = (quad[1] - quad[0]).cross(quad[2] - quad[0]);
+            let t = if geometric.dot(facing) > 0.0 { [[0, 1, 2], [0, 2, 3]] } else { [[0, 2, 1], [0, 3, 2]] };
+            m.triangles.extend(t.map(|t| t.map(|i| base + i)));
+        }
+    }
+    m
+}
+
+/// A horizontal square facing `facing` (±y), centred at `center`.
+fn square(center: Vec3, half: f32, facing: f32) -> Mesh {
+    let mut m = cuboid(center - Vec3::new(half, 0.0, half), center + Vec3::new(half, 0.0, half), false);
+    // Keep only the face whose normal points along `facing`.
+    let keep: Vec<[u32; 3]> =
+        m.triangles.iter().copied().filter(|t| (m.normals[t[0] as usize].y - facing).abs() < 1e-6).collect();
+    m.triangles = keep;
+    m
+}
+
+fn scene(meshes: Vec<(Mesh, Material)>, point_lights: Vec<PointLight>) -> Scene {
+    let mut objects = Vec::new();
+    let mut materials = Vec::new();
+    for (i, (mesh, mat)) in meshes.into_iter().enumerate() {
+        let n = mesh.triangles.len() as u32;
+        objects.push(Object {
+            id: i as u32,
+            name: format!("object{i}"),
+            node: i,
+            uvs: vec![Vec2::ZERO; mesh.positions.len()],
+            positions: mesh.positions,
+            normals: mesh.normals,
+            triangles: mesh.triangles,
+            parts: vec![Part { material: i as u32, triangles: 0..n }],
+        });
+        materials.push(mat);
+    }
+    Scene {
+        name: "test".into(),
+        gltf_path: PathBuf::from("test.gltf"),
+        sidecar_path: None,
+        objects,
+        materials,
+        textures: vec![],
+        point_lights,
+        views: vec![],
+        moving_light: None,
+        camera_box: None,
+        bake: BakePresets::default(),
+        warnings: vec![],
+        content_hash: 0,
+    }
+}
+
+/// Mean of `n` estimates of the radiance seen from `origin` towards `target`.
+fn estimate(world: &World, origin: Vec3, target: Vec3, settings: &TraceSettings, n: u32, seed: u64) -> Radiance {
+    let mut rng = Rng::new(seed, 0);
+    let dir = (target - origin).normalize();
+    let mut sum = Radiance::default();
+    for _ in 0..n {
+        sum += trace_ray(world, origin, dir, settings, &mut rng);
+    }
+    sum.scaled(1.0 / n as f32)
+}
+
+fn view(eye: Vec3, target: Vec3, fov_y: f32) -> View {
+    View { name: "test".into(), eye, target, up: Vec3::Y, fov_y }
+}
+
+/// Inside an enclosure that emits radiance 1 and reflects nothing, white (albedo 1) objects
+/// look exactly like the enclosure: radiance 1 everywhere, however light bounces between them.
+#[test]
+fn white_furnace() {
+    let s = scene(
+        vec![
+            (cuboid(Vec3::splat(-2.0), Vec3::splat(2.0), true), material(0.0, 1.0)),
+            (sphere(Vec3::new(-0.5, 0.0, 0.0), 0.45, false), material(1.0, 0.0)),
+            (cuboid(Vec3::new(0.05, -0.6, -0.6), Vec3::new(0.8, 0.6, 0.6), false), material(1.0, 0.0)),
+        ],
+        vec![],
+    );
+    let geometry = Geometry::new(&s);
+    let world = World::new(&s, &geometry, None);
+    let camera = Camera::new(&view(Vec3::new(0.0, 0.8, 1.8), Vec3::ZERO, 60.0), 1.0);
+    let settings = RenderSettings {
+        width: 24,
+        height: 24,
+        spp: 128,
+        trace: TraceSettings { max_depth: 64, rr_depth: None },
+        seed: 1,
+    };
+    let image = render(&world, &camera, &settings, &|_| {});
+    let values: Vec<Vec3> = image.component(|r| r.gi());
+    let mean = values.iter().copied().sum::<Vec3>() / values.len() as f32;
+    assert!((mean - Vec3::ONE).abs().max_element() < 0.005, "mean radiance {mean}");
+    let far = values.iter().filter(|v| (**v - Vec3::ONE).abs().max_element() > 0.1).count();
+    assert!(far * 100 <= values.len(), "{far} of {} pixels are more than 10% off", values.len());
+    // Some pixels see the objects: their light is all reflected (direct and indirect).
+    let reflected = image.pixels.iter().filter(|r| r.emitted == Vec3::ZERO).count();
+    assert!(reflected > values.len() / 4, "the camera should see the objects");
+}
+
+/// A closed sphere with albedo a and emission e everywhere: radiance e / (1 − a), of which e
+/// is emitted, e·a direct and the rest indirect. With depth D, e (1 − a^D) / (1 − a).
+#[test]
+fn closed_sphere() {
+    let (a, e) = (0.5f32, 1.0f32);
+    let s = scene(vec![(sphere(Vec3::ZERO, 1.0, true), material(a, e))], vec![]);
+    let geometry = Geometry::new(&s);
+    let world = World::new(&s, &geometry, None);
+    let origin = Vec3::new(0.1, -0.2, 0.05);
+    for (i, target) in [Vec3::X, Vec3::new(0.3, 1.0, -0.2), Vec3::new(-0.5, -0.5, 0.7)].iter().enumerate() {
+        let exact = TraceSettings { max_depth: 30, rr_depth: None };
+        let r = estimate(&world, origin, *target, &exact, 40_000, i as u64);
+        assert!((r.emitted - Vec3::splat(e)).abs().max_element() < 1e-6, "emitted {}", r.emitted);
+        assert!((r.direct - Vec3::splat(e * a)).abs().max_element() < 0.01, "direct {}", r.direct);
+        let indirect = e * a * a * (1.0 - a.powi(28)) / (1.0 - a);
+        assert!((r.indirect - Vec3::splat(indirect)).abs().max_element() < 0.01, "indirect {}", r.indirect);
+        // Russian roulette changes the noise, not the expectation.
+        let rr = TraceSettings { max_depth: 30, rr_depth: Some(3) };
+        let r = estimate(&world, origin, *target, &rr, 40_000, 100 + i as u64);
+        let total = e * (1.0 - a.powi(30)) / (1.0 - a);
+        assert!((r.gi() - Vec3::splat(total)).abs().max_element() < 0.02, "gi with roulette {}", r.gi());
+    }
+}
+
+/// A point light of intensity I at height h over a Lambert plane of albedo ρ:
+/// L = ρ/π · I cos θ / d², exactly (next-event estimation of a point light has no noise).
+#[test]
+fn point_light_over_a_plane() {
+    let (rho, h, intensity) = (0.5f32, 1.0f32, Vec3::new(2.0, 1.0, 0.5));
+    let s = scene(
+        vec![(square(Vec3::ZERO, 50.0, 1.0), material(rho, 0.0))],
+        vec![PointLight { name: "lamp".into(), node: 0, position: Vec3::new(0.0, h, 0.0), intensity }],
+    );
+    let geometry = Geometry::new(&s);
+    let world = World::new(&s, &geometry, None);
+    let settings = TraceSettings { max_depth: 8, rr_depth: None };
+    for x in [Vec3::ZERO, Vec3::new(0.5, 0.0, 0.0), Vec3::new(-1.0, 0.0, 2.0), Vec3::new(3.0, 0.0, -0.5)] {
+        let eye = x + Vec3::new(0.3, 0.4, 0.2);
+        let r = estimate(&world, eye, x, &settings, 4, 0);
+        let d = Vec3::new(0.0, h, 0.0) - x;
+        let expected = rho / PI * intensity * (h / d.length()) / d.length_squared();
+        assert!(
+            (r.direct - expected).abs().max_element() <= 1e-4 * expected.max_element(),
+            "{x}: {} vs {expected}",
+            r.direct
+        );
+        assert_eq!(r.indirect, Vec3::ZERO, "a single plane has no indirect light");
+    }
+}
+
+/// Form factor from a point to the rectangle [0, x] × [0, z] at height h above it, signed
+/// so that rectangles can be added and subtracted.
+fn corner_form_factor(x: f32, z: f32, h: f32) -> f32 {
+    let (a, b) = (x.abs() / h, z.abs() / h);
+    let (sa, sb) = ((1.0 + a * a).sqrt(), (1.0 + b * b).sqrt());
+    let f = (a / sa * (b / sa).atan() + b / sb * (a / sb).atan()) / (2.0 * PI);
+    f * x.signum() * z.signum()
+}
+
+/// A square light of radiance Le facing down at height h over a Lambert plane of albedo ρ:
+/// L = ρ · Le · F, with F the form factor of a parallel rectangle. This exercises light
+/// sampling by area, BSDF sampling and their MIS weights together.
+#[test]
+fn square_area_light_over_a_plane() {
+    let (rho, h, half, le) = (0.6f32, 0.8f32, 0.15f32, 10.0f32);
+    let s = scene(
+        vec![
+            (square(Vec3::ZERO, 50.0, 1.0), material(rho, 0.0)),
+            (square(Vec3::new(0.0, h, 0.0), half, -1.0), material(0.0, le)),
+        ],
+        vec![],
+    );
+    let geometry = Geometry::new(&s);
+    let world = World::new(&s, &geometry, None);
+    let settings = TraceSettings { max_depth: 2, rr_depth: None };
+    for (i, x) in [Vec3::ZERO, Vec3::new(0.1, 0.0, 0.05), Vec3::new(0.6, 0.0, -0.3)].iter().enumerate() {
+        let (x1, x2, z1, z2) = (-half - x.x, half - x.x, -half - x.z, half - x.z);
+        let f = corner_form_factor(x2, z2, h) - corner_form_factor(x1, z2, h) - corner_form_factor(x2, z1, h)
+            + corner_form_factor(x1, z1, h);
+        let expected = rho * le * f;
+        let eye = *x + Vec3::new(-0.2, 0.3, 0.25);
+        let r = estimate(&world, eye, *x, &settings, 50_000, i as u64);
+        let relative = (r.direct.x - expected).abs() / expected;
+        assert!(relative < 0.005, "{x}: direct {} vs {expected} ({:.3}%)", r.direct.x, 100.0 * relative);
+    }
+}
+
+fn cornell() -> Scene {
+    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell-box")).unwrap()
+}
+
+/// The split: the components are disjoint parts of the same paths. Direct light does not
+/// depend on how deep the rest of the path goes, and a depth of 2 leaves no indirect light.
+#[test]
+fn components_split_the_same_paths() {
+    let scene = cornell();
+    let geometry = Geometry::new(&scene);
+    let world = World::new(&scene, &geometry, None);
+    let camera = Camera::new(&scene.views[0], 1.0);
+    let base = RenderSettings { width: 32, height: 32, spp: 8, trace: TraceSettings::default(), seed: 5 };
+    let deep = render(&world, &camera, &base, &|_| {});
+    let shallow = render(
+        &world,
+        &camera,
+        &RenderSettings { trace: TraceSettings { max_depth: 2, rr_depth: None }, ..base },
+        &|_| {},
+    );
+    for (d, s) in deep.pixels.iter().zip(&shallow.pixels) {
+        assert_eq!(d.emitted, s.emitted);
+        assert_eq!(d.direct, s.direct);
+        assert_eq!(s.indirect, Vec3::ZERO);
+        assert_eq!(d.gi(), d.emitted + d.direct + d.indirect);
+    }
+    let total = |pick: fn(&Radiance) -> Vec3| deep.pixels.iter().map(pick).sum::<Vec3>();
+    assert!(total(|r| r.indirect).min_element() > 0.0, "the Cornell box has indirect light");
+    // Colour bleeding: indirect light off the red and green walls is not grey.
+    let indirect = total(|r| r.indirect);
+    assert!((indirect.x - indirect.y).abs() > 0.01 * indirect.x, "indirect {indirect}");
+}
+
+#[test]
+fn same_seed_same_image_different_seed_different_image() {
+    let scene = cornell();
+    let geometry = Geometry::new(&scene);
+    let world = World::new(&scene, &geometry, None);
+    let camera = Camera::new(&scene.views[0], 1.0);
+    let s = RenderSettings { width: 24, height: 16, spp: 4, trace: TraceSettings::default(), seed: 9 };
+    let a = render(&world, &camera, &s, &|_| {});
+    let b = render(&world, &camera, &s, &|_| {});
+    let c = render(&world, &camera, &RenderSettings { seed: 10, ..s }, &|_| {});
+    assert!(a.pixels == b.pixels);
+    assert!(a.pixels != c.pixels);
+}
+
+/// Moving the area light moves its light: the floor under the new position gets brighter.
+#[test]
+fn moving_the_light_moves_the_light() {
+    let scene = cornell();
+    let geometry = Geometry::new(&scene);
+    let light = scene.moving_light.clone().unwrap();
+    let settings = TraceSettings { max_depth: 2, rr_depth: None };
+    let floor_left = Vec3::new(0.45, 0.0, 0.15);
+    let eye = Vec3::new(0.278, 0.3, -0.5);
+    let near = World::new(&scene, &geometry, Some(Vec3::new(0.40, 0.45, 0.15)));
+    let far = World::new(&scene, &geometry, Some(Vec3::new(0.16, 0.45, 0.43)));
+    assert!(light.bounds.contains(Vec3::new(0.40, 0.45, 0.15)));
+    let a = estimate(&near, eye, floor_left, &settings, 4000, 1).direct;
+    let b = estimate(&far, eye, floor_left, &settings, 4000, 1).direct;
+    assert!(a.x > 2.0 * b.x, "near {a} vs far {b}");
+}
