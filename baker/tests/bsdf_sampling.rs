@@ -135,8 +135,7 @@ fn chi_square(sampler: &Bsdf, reference: &Bsdf, wo: Vec3, seed: u64) -> (f64, f6
 
 #[test]
 fn sampling_matches_pdf_chi_square() {
-    let cases: Vec<_> =
-        materials().into_iter().flat_map(|m| incident().into_iter().map(move |wo| (m.clone(), wo))).collect();
+    let cases: Vec<_> = materials().into_iter().flat_map(|m| incident().into_iter().map(move |wo| (m, wo))).collect();
     // Bonferroni: 1% overall across all cases.
     let significance = 0.01 / cases.len() as f64;
     let mut failures = Vec::new();
