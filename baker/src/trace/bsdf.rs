@@ -58,6 +58,11 @@ impl Bsdf {
         Bsdf { base_color, metallic, alpha: (roughness * roughness).max(MIN_ALPHA), specular }
     }
 
+    /// No specular lobe at all: a dielectric with `KHR_materials_specular` factor 0.
+    fn is_lambert(&self) -> bool {
+        self.specular == 0.0 && self.metallic == 0.0
+    }
+
     /// GGX normal distribution.
     pub fn d(&self, h: Vec3) -> f32 {
         let a2 = self.alpha * self.alpha;
@@ -84,6 +89,9 @@ impl Bsdf {
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return Vec3::ZERO;
+        }
+        if self.is_lambert() {
+            return self.base_color * FRAC_1_PI;
         }
         let h = (wo + wi).normalize();
         let vh = wo.dot(h).max(0.0);

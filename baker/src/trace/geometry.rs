@@ -19,6 +19,8 @@ pub struct TriangleInfo {
     pub vertices: [u32; 3],
     pub object: u32,
     pub material: u32,
+    /// Part of the moving area light (outside the BVH, moved with the light).
+    pub moving: bool,
 }
 
 pub struct Geometry {
@@ -68,13 +70,15 @@ impl Geometry {
             for part in &object.parts {
                 for t in part.triangles.clone() {
                     let id = g.triangles.len() as u32;
-                    if Some(object.id) == moving_object {
+                    let moving = Some(object.id) == moving_object;
+                    if moving {
                         g.moving.push(id);
                     }
                     g.triangles.push(TriangleInfo {
                         vertices: object.triangles[t as usize].map(|i| base + i),
                         object: object.id,
                         material: part.material,
+                        moving,
                     });
                 }
             }
@@ -98,7 +102,7 @@ impl Geometry {
     /// The triangle's corners, the moving light's moved by `offset`.
     pub fn corners(&self, id: u32, offset: Vec3) -> [Vec3; 3] {
         let info = &self.triangles[id as usize];
-        let shift = if self.moving.contains(&id) { offset } else { Vec3::ZERO };
+        let shift = if info.moving { offset } else { Vec3::ZERO };
         info.vertices.map(|v| self.positions[v as usize] + shift)
     }
 

@@ -9,10 +9,14 @@ use super::geometry::{Geometry, Hit};
 use super::sampling::uniform_triangle;
 use crate::scene::{LightKind, Scene};
 
-/// An emissive triangle, with the probability of choosing it for next-event estimation.
+/// An emissive triangle where this configuration puts it, with the probability of choosing
+/// it for next-event estimation.
 #[derive(Clone, Copy, Debug)]
 struct Emitter {
-    triangle: u32,
+    corners: [Vec3; 3],
+    normal: Vec3,
+    emission: Vec3,
+    double_sided: bool,
     area: f32,
     /// Probability of choosing this emitter, proportional to its power.
     probability: f32,
@@ -91,14 +95,23 @@ impl<'a> World<'a> {
             if emission.max_element() <= 0.0 {
                 continue;
             }
-            let [a, b, c] = geometry.corners(id as u32, light_offset);
-            let area = 0.5 * (b - a).cross(c - a).length();
+            let corners = geometry.corners(id as u32, light_offset);
+            let [a, b, c] = corners;
+            let cross = (b - a).cross(c - a);
+            let area = 0.5 * cross.length();
             if area <= 0.0 {
                 continue;
             }
             let power = luminance(emission) * area;
             emitter_of_triangle[id] = emitters.len() as u32;
-            emitters.push(Emitter { triangle: id as u32, area, probability: power });
+            emitters.push(Emitter {
+                corners,
+                normal: cross.normalize(),
+                emission,
+                double_sided: scene.materials[info.material as usize].double_sided,
+                area,
+                probability: power,
+            });
             total += power;
         }
         let mut cdf = Vec::with_capacity(emitters.len());
@@ -194,22 +207,20 @@ impl<'a> World<'a> {
             return None;
         }
         let index = self.emitter_cdf.partition_point(|&c| c <= u_pick).min(self.emitters.len() - 1);
-        let emitter = self.emitters[index];
-        let [a, b, c] = self.geometry.corners(emitter.triangle, self.light_offset);
+        let e = &self.emitters[index];
+        let [a, b, c] = e.corners;
         let bary = uniform_triangle(u);
         let point = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
         let to_light = point - from;
         let distance2 = to_light.length_squared();
         let distance = distance2.sqrt();
         let direction = to_light / distance;
-        let normal = (b - a).cross(c - a).normalize();
-        let cos_light = -normal.dot(direction);
-        let material = &self.scene.materials[self.geometry.triangles[emitter.triangle as usize].material as usize];
-        if cos_light <= 0.0 && !material.double_sided {
+        let cos_light = -e.normal.dot(direction);
+        if cos_light <= 0.0 && !e.double_sided {
             return None;
         }
-        let pdf = emitter.probability / emitter.area * distance2 / cos_light.abs();
-        Some(LightSample { direction, distance, radiance: material.emission, pdf: Some(pdf) })
+        let pdf = e.probability / e.area * distance2 / cos_light.abs();
+        Some(LightSample { direction, distance, radiance: e.emission, pdf: Some(pdf) })
     }
 
     /// Solid-angle density with which [`World::sample_area_light`] would have produced the
@@ -219,13 +230,12 @@ impl<'a> World<'a> {
         if index == NO_EMITTER {
             return 0.0;
         }
-        let emitter = self.emitters[index as usize];
-        let [a, b, c] = self.geometry.corners(triangle, self.light_offset);
-        let cos_light = (b - a).cross(c - a).normalize().dot(dir).abs();
+        let e = &self.emitters[index as usize];
+        let cos_light = e.normal.dot(dir).abs();
         if cos_light <= 0.0 {
             return 0.0;
         }
-        emitter.probability / emitter.area * t * t / cos_light
+        e.probability / e.area * t * t / cos_light
     }
 }
 
