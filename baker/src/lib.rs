@@ -1,6 +1,10 @@
 //! The offline half of rrf: scene import, the reference path tracer and network training.
 //! No Vulkan here.
 
+pub mod bake;
+pub mod hash;
+pub mod model;
+pub mod network;
 pub mod scene;
 pub mod trace;
 pub use glam;

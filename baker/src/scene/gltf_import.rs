@@ -16,6 +16,7 @@ use super::error::SceneError;
 use super::sidecar::{Aabb, Sidecar};
 use super::texture::{ColorSpace, Texture};
 use super::{LightKind, Material, MovingLight, Object, Part, PointLight, Scene, View};
+use crate::hash::Fnv64;
 
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] =
@@ -505,21 +506,4 @@ fn to_rgba8(data: &gltf::image::Data) -> Option<Vec<[u8; 4]>> {
         _ => return None,
     };
     Some(texels)
-}
-
-/// FNV-1a, 64 bits: stable across Rust versions and platforms, unlike `DefaultHasher`.
-struct Fnv64(u64);
-
-impl Default for Fnv64 {
-    fn default() -> Self {
-        Self(0xcbf2_9ce4_8422_2325)
-    }
-}
-
-impl Fnv64 {
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 = (self.0 ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
-        }
-    }
 }

@@ -1,0 +1,2 @@
+pub mod lm;
+pub mod samples;

@@ -1,0 +1,123 @@
+//! Training samples: Latin-hypercube configurations of (light position × viewpoint), rays
+//! over the sphere from each viewpoint, and at every first hit on a non-emissive surface the
+//! network inputs with direct and indirect radiance, each averaged over K paths.
+
+use glam::Vec3;
+
+use crate::network::{raw_inputs, INPUTS};
+use crate::scene::{Aabb, Scene};
+use crate::trace::integrator::radiance_leaving;
+use crate::trace::sampling::{mix64, uniform_sphere, Rng};
+use crate::trace::{Geometry, Radiance, TraceSettings, World};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Configuration {
+    pub light: Vec3,
+    pub viewpoint: Vec3,
+}
+
+/// One training sample: raw network inputs and the two targets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub object: u32,
+    pub inputs: [f32; INPUTS],
+    pub direct: [f32; 3],
+    pub indirect: [f32; 3],
+}
+
+/// `n` configurations stratified in each of the six dimensions (light x, y, z and viewpoint
+/// x, y, z): a Latin hypercube, with the strata of each dimension shuffled independently.
+pub fn latin_hypercube(n: usize, light: &Aabb, camera: &Aabb, seed: u64) -> Vec<Configuration> {
+    let mut rng = Rng::new(seed, 0x4c48_5300);
+    let mut columns: Vec<Vec<f32>> = Vec::with_capacity(6);
+    for _ in 0..6 {
+        let mut strata: Vec<usize> = (0..n).collect();
+        for i in (1..n).rev() {
+            let j = (rng.next_u32() as usize) % (i + 1);
+            strata.swap(i, j);
+        }
+        columns.push(strata.iter().map(|&s| (s as f32 + rng.next_f32()) / n as f32).collect());
+    }
+    (0..n)
+        .map(|i| Configuration {
+            light: light.lerp(Vec3::new(columns[0][i], columns[1][i], columns[2][i])),
+            viewpoint: camera.lerp(Vec3::new(columns[3][i], columns[4][i], columns[5][i])),
+        })
+        .collect()
+}
+
+/// Samples of one configuration; the same arguments always give the same samples.
+pub fn sample_configuration(
+    scene: &Scene,
+    geometry: &Geometry,
+    config: &Configuration,
+    rays: u32,
+    paths_per_sample: u32,
+    trace: &TraceSettings,
+    seed: u64,
+) -> Vec<Sample> {
+    let world = World::new(scene, geometry, Some(config.light));
+    let mut samples = Vec::new();
+    for ray in 0..rays {
+        let mut rng = Rng::new(seed, u64::from(ray));
+        let dir = uniform_sphere(rng.next_vec2());
+        let Some(hit) = world.intersect(config.viewpoint, dir) else { continue };
+        let si = world.interaction(config.viewpoint, dir, hit);
+        let material = &scene.materials[geometry.triangles[hit.triangle as usize].material as usize];
+        // Emitters show their emission and learn nothing; the inside of a closed one-sided
+        // surface is never seen.
+        if material.is_emissive() || (!si.front_face && !material.double_sided) {
+            continue;
+        }
+        let mut sum = Radiance::default();
+        for path in 0..paths_per_sample {
+            let mut path_rng = Rng::new(seed ^ mix64(u64::from(ray) + 1), u64::from(path));
+            sum += radiance_leaving(&world, &si, -dir, trace, &mut path_rng);
+        }
+        let mean = sum.scaled(1.0 / paths_per_sample.max(1) as f32);
+        samples.push(Sample {
+            object: si.object,
+            inputs: raw_inputs(si.position, -dir, config.light, si.shading_normal, si.roughness),
+            direct: mean.direct.to_array(),
+            indirect: mean.indirect.to_array(),
+        });
+    }
+    samples
+}
+
+/// Flat little-endian encoding of samples for shard files: per sample the object id (u32),
+/// then 13 inputs, 3 direct and 3 indirect (f32).
+pub fn encode(samples: &[Sample]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(samples.len() * 80);
+    for s in samples {
+        out.extend(s.object.to_le_bytes());
+        for v in s.inputs.iter().chain(&s.direct).chain(&s.indirect) {
+            out.extend(v.to_le_bytes());
+        }
+    }
+    out
+}
+
+pub const SAMPLE_BYTES: usize = 4 * (1 + INPUTS + 6);
+
+/// Inverse of [`encode`]; `None` if the length is not a whole number of samples.
+pub fn decode(bytes: &[u8]) -> Option<Vec<Sample>> {
+    if bytes.len() % SAMPLE_BYTES != 0 {
+        return None;
+    }
+    let word = |b: &[u8], i: usize| [b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]];
+    Some(
+        bytes
+            .chunks_exact(SAMPLE_BYTES)
+            .map(|b| {
+                let f = |i: usize| f32::from_le_bytes(word(b, i));
+                Sample {
+                    object: u32::from_le_bytes(word(b, 0)),
+                    inputs: std::array::from_fn(|i| f(1 + i)),
+                    direct: std::array::from_fn(|i| f(1 + INPUTS + i)),
+                    indirect: std::array::from_fn(|i| f(4 + INPUTS + i)),
+                }
+            })
+            .collect(),
+    )
+}

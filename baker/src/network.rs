@@ -1,0 +1,182 @@
+//! The radiance regression function: a 13 → 20 tanh → 10 tanh → 3 linear network, its input
+//! encoding, and the CPU reference inference. The GLSL that evaluates networks on the GPU
+//! (`shaders-glsl/include/network.glsl`) follows `Network::evaluate` line for line.
+
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+pub const INPUTS: usize = 13;
+pub const HIDDEN1: usize = 20;
+pub const HIDDEN2: usize = 10;
+pub const OUTPUTS: usize = 3;
+
+/// Parameter layout, in this order: w1 [HIDDEN1][INPUTS] row-major, b1 [HIDDEN1],
+/// w2 [HIDDEN2][HIDDEN1], b2 [HIDDEN2], w3 [OUTPUTS][HIDDEN2], b3 [OUTPUTS].
+pub const W1: usize = 0;
+pub const B1: usize = W1 + HIDDEN1 * INPUTS;
+pub const W2: usize = B1 + HIDDEN1;
+pub const B2: usize = W2 + HIDDEN2 * HIDDEN1;
+pub const W3: usize = B2 + HIDDEN2;
+pub const B3: usize = W3 + OUTPUTS * HIDDEN2;
+pub const PARAMETERS: usize = B3 + OUTPUTS;
+
+/// Which light a network learns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Component {
+    Direct,
+    Indirect,
+}
+
+impl Component {
+    pub const ALL: [Component; 2] = [Component::Direct, Component::Indirect];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Component::Direct => "direct",
+            Component::Indirect => "indirect",
+        }
+    }
+}
+
+/// The network's raw inputs, before normalisation: surface position (3), direction towards
+/// the viewer (3), light position (3), shading normal (3), roughness (1).
+pub fn raw_inputs(position: Vec3, to_viewer: Vec3, light: Vec3, normal: Vec3, roughness: f32) -> [f32; INPUTS] {
+    [
+        position.x,
+        position.y,
+        position.z,
+        to_viewer.x,
+        to_viewer.y,
+        to_viewer.z,
+        light.x,
+        light.y,
+        light.z,
+        normal.x,
+        normal.y,
+        normal.z,
+        roughness,
+    ]
+}
+
+/// One trained network with what is needed to use it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Network {
+    pub object: String,
+    pub component: Component,
+    /// Input `i` maps `[input_min[i], input_max[i]]` to `[-1, 1]`.
+    pub input_min: [f32; INPUTS],
+    pub input_max: [f32; INPUTS],
+    /// The network predicts radiance / `output_scale`.
+    pub output_scale: f32,
+    pub params: Vec<f32>,
+}
+
+/// Maps `x` from `[lo, hi]` to `[-1, 1]`; a constant input (lo == hi) maps to 0.
+pub fn normalize(x: f32, lo: f32, hi: f32) -> f32 {
+    let range = hi - lo;
+    if range > 1e-6 {
+        2.0 * (x - lo) / range - 1.0
+    } else {
+        0.0
+    }
+}
+
+impl Network {
+    /// Radiance (linear RGB) for raw inputs.
+    pub fn evaluate(&self, raw: &[f32; INPUTS]) -> Vec3 {
+        let mut x = [0.0f32; INPUTS];
+        for i in 0..INPUTS {
+            x[i] = normalize(raw[i], self.input_min[i], self.input_max[i]);
+        }
+        let y = forward(&self.params, &x);
+        Vec3::from(y) * self.output_scale
+    }
+}
+
+/// The network on normalised inputs.
+pub fn forward(p: &[f32], x: &[f32; INPUTS]) -> [f32; OUTPUTS] {
+    let mut h1 = [0.0f32; HIDDEN1];
+    for j in 0..HIDDEN1 {
+        let mut s = p[B1 + j];
+        for i in 0..INPUTS {
+            s += p[W1 + j * INPUTS + i] * x[i];
+        }
+        h1[j] = s.tanh();
+    }
+    let mut h2 = [0.0f32; HIDDEN2];
+    for k in 0..HIDDEN2 {
+        let mut s = p[B2 + k];
+        for j in 0..HIDDEN1 {
+            s += p[W2 + k * HIDDEN1 + j] * h1[j];
+        }
+        h2[k] = s.tanh();
+    }
+    let mut y = [0.0f32; OUTPUTS];
+    for c in 0..OUTPUTS {
+        let mut s = p[B3 + c];
+        for k in 0..HIDDEN2 {
+            s += p[W3 + c * HIDDEN2 + k] * h2[k];
+        }
+        y[c] = s;
+    }
+    y
+}
+
+/// The network and its Jacobian: `jacobian[c]` is ∂y_c/∂params (length [`PARAMETERS`]).
+/// In f64, because Levenberg–Marquardt accumulates JᵀJ from it.
+pub fn forward_with_jacobian(
+    p: &[f64],
+    x: &[f64; INPUTS],
+    jacobian: &mut [[f64; PARAMETERS]; OUTPUTS],
+) -> [f64; OUTPUTS] {
+    let mut h1 = [0.0f64; HIDDEN1];
+    for j in 0..HIDDEN1 {
+        let mut s = p[B1 + j];
+        for i in 0..INPUTS {
+            s += p[W1 + j * INPUTS + i] * x[i];
+        }
+        h1[j] = s.tanh();
+    }
+    let mut h2 = [0.0f64; HIDDEN2];
+    for k in 0..HIDDEN2 {
+        let mut s = p[B2 + k];
+        for j in 0..HIDDEN1 {
+            s += p[W2 + k * HIDDEN1 + j] * h1[j];
+        }
+        h2[k] = s.tanh();
+    }
+    let mut y = [0.0f64; OUTPUTS];
+    for c in 0..OUTPUTS {
+        let g = &mut jacobian[c];
+        g.fill(0.0);
+        let mut s = p[B3 + c];
+        for k in 0..HIDDEN2 {
+            s += p[W3 + c * HIDDEN2 + k] * h2[k];
+            g[W3 + c * HIDDEN2 + k] = h2[k];
+        }
+        g[B3 + c] = 1.0;
+        y[c] = s;
+        // Back through layer 2 and layer 1.
+        let mut d2 = [0.0f64; HIDDEN2];
+        for k in 0..HIDDEN2 {
+            d2[k] = p[W3 + c * HIDDEN2 + k] * (1.0 - h2[k] * h2[k]);
+            g[B2 + k] = d2[k];
+            for j in 0..HIDDEN1 {
+                g[W2 + k * HIDDEN1 + j] = d2[k] * h1[j];
+            }
+        }
+        for j in 0..HIDDEN1 {
+            let mut d1 = 0.0;
+            for k in 0..HIDDEN2 {
+                d1 += p[W2 + k * HIDDEN1 + j] * d2[k];
+            }
+            d1 *= 1.0 - h1[j] * h1[j];
+            g[B1 + j] = d1;
+            for i in 0..INPUTS {
+                g[W1 + j * INPUTS + i] = d1 * x[i];
+            }
+        }
+    }
+    y
+}
