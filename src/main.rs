@@ -33,6 +33,15 @@ enum Command {
     /// Uses all cores. The same seed gives the same image. EXR output is linear radiance;
     /// PNG output is tonemapped (exposure, ACES, sRGB) like the renderer's.
     Reference(rrf::commands::reference::ReferenceArgs),
+    /// Bake a scene's radiance regression functions: path-traced training samples, then two
+    /// networks (direct and indirect light) per object, trained with Levenberg–Marquardt.
+    ///
+    /// Writes a safetensors model. Sampling is saved in shards as it goes: a bake that is
+    /// interrupted resumes where it stopped when started again with the same settings.
+    Bake(rrf::commands::bake::BakeArgs),
+    /// Render one frame from a baked model: each pixel's object networks give its direct and
+    /// indirect light; emitters show their emission.
+    Render(rrf::commands::render::RenderArgs),
 }
 
 fn main() -> ExitCode {
@@ -40,6 +49,8 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Info { scene, json } => rrf::commands::info::run(scene.as_deref(), json),
         Command::Reference(args) => rrf::commands::reference::run(&args),
+        Command::Bake(args) => rrf::commands::bake::run(&args),
+        Command::Render(args) => rrf::commands::render::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -24,6 +24,12 @@ impl Progress {
         self.0.inc(n);
     }
 
+    /// Sets the position and the total (which may only be known once work has started).
+    pub fn set(&self, done: u64, total: u64) {
+        self.0.set_length(total);
+        self.0.set_position(done);
+    }
+
     pub fn finish(&self) {
         self.0.finish_and_clear();
     }

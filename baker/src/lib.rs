@@ -5,6 +5,7 @@ pub mod bake;
 pub mod hash;
 pub mod model;
 pub mod network;
+pub mod predict;
 pub mod scene;
 pub mod trace;
 pub use glam;

@@ -1,5 +1,7 @@
 //! One module per `rrf` subcommand.
 
+pub mod bake;
 pub mod info;
 pub mod reference;
+pub mod render;
 pub mod view_args;

@@ -1,2 +1,415 @@
+//! Baking: training samples from the path tracer, then two networks per object.
+//!
+//! Sampling is written in shards of a few configurations as it goes, each shard keyed by the
+//! scene and every setting that shapes its samples. A bake killed at any point and started
+//! again keeps the finished shards, computes the rest, and ends with the same model as an
+//! uninterrupted bake with the same seed: every shard is a pure function of its key, and
+//! training is deterministic.
+
 pub mod lm;
 pub mod samples;
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::hash::Fnv64;
+use crate::model::{Metadata, Model, NetworkInfo, Untrained, FORMAT_VERSION, INPUT_NAMES};
+use crate::network::{normalize, Component, Network, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS};
+use crate::scene::{BakeOverrides, Scene};
+use crate::trace::sampling::{mix64, Rng};
+use crate::trace::{Geometry, TraceSettings};
+use lm::{initial_parameters, Dataset, LmSettings};
+use samples::{latin_hypercube, sample_configuration, Sample};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Quality {
+    /// Seconds; for CI.
+    Test,
+    /// A few minutes; for trying things.
+    Preview,
+    /// What ships.
+    Final,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct BakeSettings {
+    pub quality: Quality,
+    pub seed: u64,
+    pub configurations: u32,
+    pub rays_per_configuration: u32,
+    pub paths_per_sample: u32,
+    pub max_depth: u32,
+    pub max_iterations: u32,
+    /// Networks train on at most this many samples (a random subset of the object's).
+    pub max_samples_per_network: usize,
+    /// Objects with fewer samples get no network and are reported.
+    pub min_samples: usize,
+    /// Share of each object's samples held out for validation and early stopping.
+    pub validation_fraction: f32,
+    /// Configurations per shard file.
+    pub shard_configurations: u32,
+}
+
+impl BakeSettings {
+    /// The preset for `quality`, with the scene's overrides applied.
+    pub fn new(quality: Quality, seed: u64, scene: &Scene) -> Self {
+        let mut s = match quality {
+            Quality::Test => BakeSettings {
+                quality,
+                seed,
+                configurations: 16,
+                rays_per_configuration: 1500,
+                paths_per_sample: 4,
+                max_depth: 6,
+                max_iterations: 15,
+                max_samples_per_network: 1500,
+                min_samples: 100,
+                validation_fraction: 0.2,
+                shard_configurations: 4,
+            },
+            Quality::Preview => BakeSettings {
+                quality,
+                seed,
+                configurations: 96,
+                rays_per_configuration: 2000,
+                paths_per_sample: 8,
+                max_depth: 8,
+                max_iterations: 40,
+                max_samples_per_network: 8000,
+                min_samples: 200,
+                validation_fraction: 0.15,
+                shard_configurations: 8,
+            },
+            Quality::Final => BakeSettings {
+                quality,
+                seed,
+                configurations: 256,
+                rays_per_configuration: 4000,
+                paths_per_sample: 32,
+                max_depth: 8,
+                max_iterations: 60,
+                max_samples_per_network: 12000,
+                min_samples: 400,
+                validation_fraction: 0.15,
+                shard_configurations: 8,
+            },
+        };
+        let overrides = match quality {
+            Quality::Test => &scene.bake.test,
+            Quality::Preview => &scene.bake.preview,
+            Quality::Final => &scene.bake.final_,
+        };
+        if let Some(BakeOverrides {
+            configurations,
+            rays_per_configuration,
+            paths_per_sample,
+            max_depth,
+            max_iterations,
+        }) = overrides
+        {
+            s.configurations = configurations.unwrap_or(s.configurations);
+            s.rays_per_configuration = rays_per_configuration.unwrap_or(s.rays_per_configuration);
+            s.paths_per_sample = paths_per_sample.unwrap_or(s.paths_per_sample);
+            s.max_depth = max_depth.unwrap_or(s.max_depth);
+            s.max_iterations = max_iterations.unwrap_or(s.max_iterations);
+        }
+        s
+    }
+
+    fn trace(&self) -> TraceSettings {
+        TraceSettings { max_depth: self.max_depth, rr_depth: Some(5) }
+    }
+}
+
+/// Where a bake reports progress; called from worker threads.
+pub trait BakeProgress: Sync {
+    /// `done` of `total` configurations sampled (including resumed ones).
+    fn sampled(&self, done: u64, total: u64);
+    /// `done` of `total` networks trained.
+    fn trained(&self, done: u64, total: u64);
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BakeError {
+    #[error(
+        "{scene}: cannot bake without a sidecar [light] and [camera] (the boxes the light and the viewer move in)"
+    )]
+    NoDomains { scene: PathBuf },
+    #[error("{}: {problem}", path.display())]
+    Io { path: PathBuf, problem: String },
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct BakeReport {
+    pub samples: usize,
+    pub paths: u64,
+    pub sample_seconds: f64,
+    pub train_seconds: f64,
+    /// Shards found finished on disk from an earlier, interrupted bake.
+    pub resumed_shards: usize,
+    pub shards: usize,
+}
+
+const SHARD_MAGIC: &[u8; 8] = b"RRFSHRD1";
+
+/// Bakes `scene`, keeping sample shards in `cache` (created if needed).
+pub fn bake(
+    scene: &Scene,
+    settings: &BakeSettings,
+    cache: &Path,
+    progress: &dyn BakeProgress,
+) -> Result<(Model, BakeReport), BakeError> {
+    let (Some(light), Some(camera)) = (&scene.moving_light, &scene.camera_box) else {
+        return Err(BakeError::NoDomains { scene: scene.gltf_path.clone() });
+    };
+    std::fs::create_dir_all(cache)
+        .map_err(|e| BakeError::Io { path: cache.to_path_buf(), problem: format!("cannot create: {e}") })?;
+    let geometry = Geometry::new(scene);
+    let configs = latin_hypercube(settings.configurations as usize, &light.bounds, camera, settings.seed);
+
+    // Sampling, shard by shard.
+    let start = Instant::now();
+    let settings_json = serde_json::to_string(&SamplingKey::from(settings)).expect("settings serialise");
+    let shard_size = settings.shard_configurations.max(1) as usize;
+    let shard_count = configs.len().div_ceil(shard_size);
+    let done = std::sync::atomic::AtomicU64::new(0);
+    let total = configs.len() as u64;
+    let shards: Vec<Result<(Vec<Sample>, bool), BakeError>> = (0..shard_count)
+        .into_par_iter()
+        .map(|shard| {
+            let range = shard * shard_size..((shard + 1) * shard_size).min(configs.len());
+            let mut key = Fnv64::default();
+            key.write(&scene.content_hash.to_le_bytes());
+            key.write(settings_json.as_bytes());
+            key.write(&(shard as u64).to_le_bytes());
+            let path = cache.join(format!("shard-{shard:05}.bin"));
+            let report = |n: usize| {
+                let d = done.fetch_add(n as u64, std::sync::atomic::Ordering::SeqCst) + n as u64;
+                progress.sampled(d, total);
+            };
+            if let Some(samples) = read_shard(&path, key.0) {
+                report(range.len());
+                return Ok((samples, true));
+            }
+            let mut samples = Vec::new();
+            for i in range {
+                let seed = mix64(settings.seed ^ mix64(i as u64 + 1));
+                samples.extend(sample_configuration(
+                    scene,
+                    &geometry,
+                    &configs[i],
+                    settings.rays_per_configuration,
+                    settings.paths_per_sample,
+                    &settings.trace(),
+                    seed,
+                ));
+                report(1);
+            }
+            write_shard(&path, key.0, &samples)?;
+            Ok((samples, false))
+        })
+        .collect();
+    let mut all = Vec::new();
+    let mut resumed_shards = 0;
+    for shard in shards {
+        let (samples, resumed) = shard?;
+        resumed_shards += usize::from(resumed);
+        all.extend(samples);
+    }
+    let sample_seconds = start.elapsed().as_secs_f64();
+
+    // Training: two networks per object that has samples.
+    let start = Instant::now();
+    let mut by_object: Vec<Vec<&Sample>> = vec![Vec::new(); scene.objects.len()];
+    for s in &all {
+        by_object[s.object as usize].push(s);
+    }
+    let mut untrained = Vec::new();
+    let mut jobs = Vec::new();
+    for object in &scene.objects {
+        let emissive = object.parts.iter().all(|p| scene.materials[p.material as usize].is_emissive());
+        if emissive {
+            continue; // emitters show their emission; no network
+        }
+        let samples = &by_object[object.id as usize];
+        if samples.len() < settings.min_samples {
+            untrained.push(Untrained {
+                object: object.name.clone(),
+                samples: samples.len(),
+                reason: format!(
+                    "{} samples, fewer than the {} needed; the object was rarely seen from the camera box",
+                    samples.len(),
+                    settings.min_samples
+                ),
+            });
+            continue;
+        }
+        for component in Component::ALL {
+            jobs.push((object.id, component));
+        }
+    }
+    let trained = std::sync::atomic::AtomicU64::new(0);
+    let networks: Vec<(Network, NetworkInfo)> = jobs
+        .par_iter()
+        .map(|&(object, component)| {
+            let result = train_network(scene, settings, object, component, &by_object[object as usize]);
+            let d = trained.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+            progress.trained(d, jobs.len() as u64);
+            result
+        })
+        .collect();
+    let train_seconds = start.elapsed().as_secs_f64();
+
+    let metadata = Metadata {
+        format_version: FORMAT_VERSION,
+        scene: scene.name.clone(),
+        scene_hash: format!("{:016x}", scene.content_hash),
+        inputs: INPUT_NAMES.iter().map(|s| s.to_string()).collect(),
+        layers: vec![HIDDEN1, HIDDEN2, OUTPUTS],
+        activation: "tanh".into(),
+        networks: networks.iter().map(|(_, info)| info.clone()).collect(),
+        untrained,
+        bake: serde_json::to_value(settings).expect("settings serialise"),
+        checksum: String::new(),
+    };
+    let model = Model { metadata, networks: networks.into_iter().map(|(n, _)| n).collect() };
+    let paths = all.len() as u64 * u64::from(settings.paths_per_sample);
+    let report =
+        BakeReport { samples: all.len(), paths, sample_seconds, train_seconds, resumed_shards, shards: shard_count };
+    Ok((model, report))
+}
+
+/// Everything that shapes the samples of a shard (not the training settings).
+#[derive(Serialize)]
+struct SamplingKey {
+    seed: u64,
+    configurations: u32,
+    rays_per_configuration: u32,
+    paths_per_sample: u32,
+    max_depth: u32,
+    shard_configurations: u32,
+    format: u32,
+}
+
+impl From<&BakeSettings> for SamplingKey {
+    fn from(s: &BakeSettings) -> Self {
+        SamplingKey {
+            seed: s.seed,
+            configurations: s.configurations,
+            rays_per_configuration: s.rays_per_configuration,
+            paths_per_sample: s.paths_per_sample,
+            max_depth: s.max_depth,
+            shard_configurations: s.shard_configurations,
+            format: 1,
+        }
+    }
+}
+
+fn read_shard(path: &Path, key: u64) -> Option<Vec<Sample>> {
+    let bytes = std::fs::read(path).ok()?;
+    if bytes.len() < 16 || &bytes[..8] != SHARD_MAGIC || bytes[8..16] != key.to_le_bytes() {
+        return None;
+    }
+    samples::decode(&bytes[16..])
+}
+
+fn write_shard(path: &Path, key: u64, samples: &[Sample]) -> Result<(), BakeError> {
+    let mut bytes = SHARD_MAGIC.to_vec();
+    bytes.extend(key.to_le_bytes());
+    bytes.extend(samples::encode(samples));
+    // Written beside and renamed, so that a shard on disk is always whole.
+    let partial = path.with_extension("partial");
+    std::fs::write(&partial, bytes)
+        .and_then(|()| std::fs::rename(&partial, path))
+        .map_err(|e| BakeError::Io { path: path.to_path_buf(), problem: format!("cannot write sample shard: {e}") })
+}
+
+/// Input ranges for an object's networks: its bounding box for positions, the light's box for
+/// the light, [-1, 1] for directions, [0, 1] for roughness.
+fn input_ranges(scene: &Scene, object: u32) -> ([f32; INPUTS], [f32; INPUTS]) {
+    let o = &scene.objects[object as usize];
+    let (mut lo, mut hi) = ([-1.0f32; INPUTS], [1.0f32; INPUTS]);
+    let min = o.positions.iter().copied().fold(glam::Vec3::splat(f32::INFINITY), glam::Vec3::min);
+    let max = o.positions.iter().copied().fold(glam::Vec3::splat(f32::NEG_INFINITY), glam::Vec3::max);
+    let light = scene.moving_light.as_ref().map(|l| l.bounds);
+    for a in 0..3 {
+        lo[a] = min[a];
+        hi[a] = max[a];
+        if let Some(b) = light {
+            lo[6 + a] = b.min[a];
+            hi[6 + a] = b.max[a];
+        }
+    }
+    lo[12] = 0.0;
+    hi[12] = 1.0;
+    (lo, hi)
+}
+
+fn train_network(
+    scene: &Scene,
+    settings: &BakeSettings,
+    object: u32,
+    component: Component,
+    samples: &[&Sample],
+) -> (Network, NetworkInfo) {
+    let start = Instant::now();
+    // A deterministic random subset, then a train/validation split.
+    let mut order: Vec<usize> = (0..samples.len()).collect();
+    let mut rng = Rng::new(settings.seed, 0x5eed_0000 + u64::from(object));
+    for i in (1..order.len()).rev() {
+        order.swap(i, rng.next_u32() as usize % (i + 1));
+    }
+    order.truncate(settings.max_samples_per_network);
+    let (input_min, input_max) = input_ranges(scene, object);
+    let target = |s: &Sample| match component {
+        Component::Direct => s.direct,
+        Component::Indirect => s.indirect,
+    };
+    let rms = {
+        let sum: f64 = order.iter().flat_map(|&i| target(samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
+        ((sum / (order.len() * OUTPUTS) as f64).sqrt() as f32).max(1e-6)
+    };
+    let encode = |s: &Sample| -> ([f32; INPUTS], [f32; OUTPUTS]) {
+        (std::array::from_fn(|i| normalize(s.inputs[i], input_min[i], input_max[i])), target(s).map(|v| v / rms))
+    };
+    let validation_count = ((order.len() as f32 * settings.validation_fraction) as usize).max(1);
+    let (mut train, mut validation) = (Dataset::default(), Dataset::default());
+    for (n, &i) in order.iter().enumerate() {
+        let (x, t) = encode(samples[i]);
+        let set = if n < validation_count { &mut validation } else { &mut train };
+        set.inputs.push(x);
+        set.targets.push(t);
+    }
+    let mut mean = [0.0f32; OUTPUTS];
+    for t in &train.targets {
+        (0..OUTPUTS).for_each(|c| mean[c] += t[c] / train.len() as f32);
+    }
+    let seed = mix64(settings.seed ^ (u64::from(object) << 8) ^ component as u64);
+    let result = lm::train(
+        &train,
+        &validation,
+        initial_parameters(seed, mean),
+        &LmSettings { max_iterations: settings.max_iterations, patience: 10 },
+    );
+    let name = scene.objects[object as usize].name.clone();
+    // Errors in radiance units.
+    let scale2 = f64::from(rms) * f64::from(rms);
+    let info = NetworkInfo {
+        object: name.clone(),
+        component,
+        input_min: input_min.to_vec(),
+        input_max: input_max.to_vec(),
+        target_transform: "scale".into(),
+        output_scale: rms,
+        samples: order.len(),
+        train_mse: result.train_mse * scale2,
+        val_mse: result.val_mse * scale2,
+        iterations: result.iterations,
+        train_seconds: start.elapsed().as_secs_f64(),
+    };
+    (Network { object: name, component, input_min, input_max, output_scale: rms, params: result.params }, info)
+}

@@ -1,0 +1,54 @@
+//! Images predicted by a model on the CPU: primary hits by ray casting, then each object's
+//! networks with the CPU reference inference. The exact counterpart of the GPU renderer.
+
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+use crate::model::Model;
+use crate::network::{raw_inputs, Component, Network};
+use crate::trace::{Camera, Radiance, RadianceImage, World};
+
+/// The networks of every object, by object id; `None` for objects without one.
+pub struct ObjectNetworks<'a> {
+    pub direct: Vec<Option<&'a Network>>,
+    pub indirect: Vec<Option<&'a Network>>,
+}
+
+impl<'a> ObjectNetworks<'a> {
+    pub fn new(world: &World, model: &'a Model) -> Self {
+        let lookup =
+            |component| world.scene.objects.iter().map(|o| model.network(&o.name, component)).collect::<Vec<_>>();
+        ObjectNetworks { direct: lookup(Component::Direct), indirect: lookup(Component::Indirect) }
+    }
+}
+
+/// The light position the networks see: the moving light's current position.
+pub fn light_position(world: &World) -> Vec3 {
+    world.scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position + world.light_offset)
+}
+
+/// One ray through each pixel centre: emission where it hits an emitter, the object's
+/// networks elsewhere, nothing where it hits nothing.
+pub fn predict_image(world: &World, camera: &Camera, model: &Model, width: u32, height: u32) -> RadianceImage {
+    let networks = ObjectNetworks::new(world, model);
+    let light = light_position(world);
+    let size = Vec2::new(width as f32, height as f32);
+    let pixels = (0..width * height)
+        .into_par_iter()
+        .map(|i| {
+            let film = (Vec2::new((i % width) as f32, (i / width) as f32) + 0.5) / size;
+            let dir = camera.direction(film);
+            let Some(hit) = world.intersect(camera.eye, dir) else { return Radiance::default() };
+            let si = world.interaction(camera.eye, dir, hit);
+            let inputs = raw_inputs(si.position, -dir, light, si.shading_normal, si.roughness);
+            let object = si.object as usize;
+            let eval = |n: Option<&Network>| n.map_or(Vec3::ZERO, |n| n.evaluate(&inputs));
+            Radiance {
+                emitted: si.emission,
+                direct: eval(networks.direct[object]),
+                indirect: eval(networks.indirect[object]),
+            }
+        })
+        .collect();
+    RadianceImage { width, height, pixels }
+}

@@ -1,0 +1,151 @@
+//! `rrf bake`: training samples from the path tracer, then two networks per object.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use rrf_baker::bake::{bake, BakeProgress, BakeSettings, Quality};
+use rrf_baker::scene::Scene;
+use serde_json::json;
+
+use crate::progress::Progress;
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub enum QualityArg {
+    /// Seconds; for CI and smoke tests.
+    Test,
+    /// A few minutes.
+    Preview,
+    /// The quality that ships.
+    Final,
+}
+
+#[derive(Args, Debug)]
+pub struct BakeArgs {
+    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    pub scene: PathBuf,
+    /// Preset for the number of configurations, samples, paths and iterations; the scene's
+    /// sidecar may override it ([bake.test], [bake.preview], [bake.final]).
+    #[arg(long, value_enum, default_value_t = QualityArg::Final)]
+    pub quality: QualityArg,
+    /// Random seed: the same seed gives the same model.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Model file to write; default: model.safetensors in the scene's folder.
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Keep the sample shards (MODEL.bake-cache/) after a successful bake. An interrupted bake
+    /// always keeps them, and resumes from them when started again with the same settings.
+    #[arg(long)]
+    pub keep_samples: bool,
+    /// Print one line of JSON with the figures of the bake.
+    #[arg(long)]
+    pub json: bool,
+}
+
+struct Bars {
+    sampling: Progress,
+    training: Progress,
+}
+
+impl BakeProgress for Bars {
+    fn sampled(&self, done: u64, total: u64) {
+        self.sampling.set(done, total);
+    }
+
+    fn trained(&self, done: u64, total: u64) {
+        self.training.set(done, total);
+    }
+}
+
+pub fn default_model_path(scene: &Scene) -> PathBuf {
+    scene.gltf_path.parent().unwrap_or(Path::new(".")).join("model.safetensors")
+}
+
+pub fn run(args: &BakeArgs) -> Result<()> {
+    let scene = Scene::load(&args.scene)?;
+    for warning in &scene.warnings {
+        eprintln!("warning: {warning}");
+    }
+    let quality = match args.quality {
+        QualityArg::Test => Quality::Test,
+        QualityArg::Preview => Quality::Preview,
+        QualityArg::Final => Quality::Final,
+    };
+    let settings = BakeSettings::new(quality, args.seed, &scene);
+    let output = args.output.clone().unwrap_or_else(|| default_model_path(&scene));
+    let cache = output.with_extension("bake-cache");
+    let bars = Bars {
+        sampling: Progress::new(u64::from(settings.configurations), "sampling", args.json),
+        training: Progress::new(1, "training", args.json),
+    };
+    let (model, report) = bake(&scene, &settings, &cache, &bars)?;
+    bars.sampling.finish();
+    bars.training.finish();
+    model.save(&output)?;
+    if !args.keep_samples {
+        std::fs::remove_dir_all(&cache).with_context(|| format!("cannot remove {}", cache.display()))?;
+    }
+
+    let networks: Vec<_> = model
+        .metadata
+        .networks
+        .iter()
+        .map(|n| {
+            json!({
+                "object": n.object, "component": n.component, "samples": n.samples,
+                "train_mse": n.train_mse, "val_mse": n.val_mse, "iterations": n.iterations,
+            })
+        })
+        .collect();
+    if args.json {
+        let line = json!({
+            "scene": scene.name,
+            "output": output,
+            "quality": quality,
+            "seed": args.seed,
+            "samples": report.samples,
+            "paths": report.paths,
+            "sample_seconds": report.sample_seconds,
+            "train_seconds": report.train_seconds,
+            "resumed_shards": report.resumed_shards,
+            "networks": networks,
+            "untrained": model.metadata.untrained,
+        });
+        println!("{line}");
+        return Ok(());
+    }
+    eprintln!(
+        "sampled {} samples ({} paths) in {:.1} s{}; trained {} networks in {:.1} s",
+        report.samples,
+        report.paths,
+        report.sample_seconds,
+        if report.resumed_shards > 0 {
+            format!(", {} of {} shards resumed from {}", report.resumed_shards, report.shards, cache.display())
+        } else {
+            String::new()
+        },
+        model.networks.len(),
+        report.train_seconds
+    );
+    eprintln!(
+        "\n  {:<18} {:<9} {:>8} {:>11} {:>11} {:>5}",
+        "object", "component", "samples", "train MSE", "val MSE", "iter"
+    );
+    for n in &model.metadata.networks {
+        eprintln!(
+            "  {:<18} {:<9} {:>8} {:>11.3e} {:>11.3e} {:>5}",
+            n.object,
+            n.component.name(),
+            n.samples,
+            n.train_mse,
+            n.val_mse,
+            n.iterations
+        );
+    }
+    for u in &model.metadata.untrained {
+        eprintln!("  warning: {} has no network: {}", u.object, u.reason);
+    }
+    eprintln!("\nwrote {}", output.display());
+    Ok(())
+}
