@@ -1,0 +1,118 @@
+//! Baking: resumption gives the same model, the model file round-trips, and every kind of bad
+//! model file is refused with a clear error.
+
+use std::path::{Path, PathBuf};
+
+use rrf_baker::bake::{bake, BakeProgress, BakeSettings, Quality};
+use rrf_baker::model::Model;
+use rrf_baker::network::Component;
+use rrf_baker::scene::Scene;
+
+struct Quiet;
+
+impl BakeProgress for Quiet {
+    fn sampled(&self, _: u64, _: u64) {}
+    fn trained(&self, _: u64, _: u64) {}
+}
+
+fn scene(name: &str) -> Scene {
+    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(name)).unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rrf-bake-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn test_bake(scene: &Scene, cache: &Path) -> (Model, rrf_baker::bake::BakeReport) {
+    let settings = BakeSettings::new(Quality::Test, 3, scene);
+    bake(scene, &settings, cache, &Quiet).unwrap()
+}
+
+#[test]
+fn interrupted_bake_resumes_to_the_same_model() {
+    let scene = scene("cornell-box");
+    let full_cache = scratch("full");
+    let (full, report) = test_bake(&scene, &full_cache);
+    assert_eq!(report.resumed_shards, 0);
+    assert!(report.shards >= 4, "the test preset should make several shards");
+    assert!(!full.networks.is_empty());
+
+    // An interrupted bake: half the shards finished, one half-written shard left behind.
+    let partial_cache = scratch("partial");
+    let mut shards: Vec<_> = std::fs::read_dir(&full_cache).unwrap().map(|e| e.unwrap().path()).collect();
+    shards.sort();
+    let keep = shards.len() / 2;
+    for shard in &shards[..keep] {
+        std::fs::copy(shard, partial_cache.join(shard.file_name().unwrap())).unwrap();
+    }
+    let torn = std::fs::read(&shards[keep]).unwrap();
+    std::fs::write(partial_cache.join(shards[keep].file_name().unwrap()), &torn[..torn.len() / 3]).unwrap();
+
+    let (resumed, report) = test_bake(&scene, &partial_cache);
+    assert_eq!(report.resumed_shards, keep, "finished shards are reused, the torn one is not");
+    assert!(resumed.networks == full.networks, "resumed bake must give the same networks as the uninterrupted one");
+    let stats = |m: &Model| -> Vec<_> {
+        m.metadata
+            .networks
+            .iter()
+            .map(|n| (n.object.clone(), n.samples, n.train_mse, n.val_mse, n.iterations))
+            .collect()
+    };
+    assert_eq!(stats(&resumed), stats(&full));
+
+    // Different settings never reuse shards made with others.
+    let other = BakeSettings::new(Quality::Test, 4, &scene);
+    let (_, report) = bake(&scene, &other, &partial_cache, &Quiet).unwrap();
+    assert_eq!(report.resumed_shards, 0);
+}
+
+#[test]
+fn model_round_trips_and_refuses_bad_files() {
+    let scene = scene("cornell-box");
+    let dir = scratch("model");
+    let (model, _) = test_bake(&scene, &dir.join("cache"));
+    let path = dir.join("model.safetensors");
+    model.save(&path).unwrap();
+    let loaded = Model::load(&path, Some(&scene)).unwrap();
+    assert_eq!(loaded, Model::from_bytes(&model.to_bytes().unwrap()).unwrap());
+    assert_eq!(loaded.networks, model.networks);
+    let floor = loaded.network("Floor", Component::Direct).expect("the floor has a direct network");
+    assert_eq!(floor.params.len(), 523);
+    assert!(loaded.network("CeilingLight", Component::Direct).is_none(), "emitters get no network");
+
+    let bytes = std::fs::read(&path).unwrap();
+    let write = |name: &str, content: &[u8]| {
+        let p = dir.join(name);
+        std::fs::write(&p, content).unwrap();
+        p
+    };
+    let error = |p: &Path, scene: Option<&Scene>| Model::load(p, scene).unwrap_err().to_string();
+
+    let message = error(&write("truncated.safetensors", &bytes[..bytes.len() - 100]), None);
+    assert!(message.contains("truncated.safetensors") && message.contains("truncated or corrupted"), "{message}");
+
+    let mut flipped = bytes.clone();
+    let last = flipped.len() - 7;
+    flipped[last] ^= 0x40;
+    let message = error(&write("flipped.safetensors", &flipped), None);
+    assert!(message.contains("checksum"), "{message}");
+
+    let needle = b"format_version\\\":1";
+    let at = bytes.windows(needle.len()).position(|w| w == needle).expect("the metadata holds the version");
+    let mut versioned = bytes.clone();
+    versioned[at + needle.len() - 1] = b'7';
+    let message = error(&write("version.safetensors", &versioned), None);
+    assert!(message.contains("version 7") && message.contains("re-bake"), "{message}");
+
+    let message = error(&path, Some(&crate::scene("glossy-room")));
+    assert!(message.contains("cornell-box") && message.contains("re-bake"), "{message}");
+
+    let message = error(&dir.join("missing.safetensors"), None);
+    assert!(message.contains("rrf bake"), "{message}");
+
+    let message = error(&write("not-a-model.safetensors", b"hello"), None);
+    assert!(message.contains("not a valid model file"), "{message}");
+}

@@ -1,0 +1,59 @@
+//! `rrf bake --quality test --json` and `rrf render --cpu` from its model, as a user runs them.
+
+mod common;
+
+use common::rrf;
+
+#[test]
+fn bake_then_render_on_the_cpu() {
+    let dir = std::env::temp_dir().join(format!("rrf-cli-bake-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("model.safetensors");
+    let model_arg = model.to_str().unwrap();
+    let out = rrf(&["bake", "scenes/cornell-box", "--quality", "test", "--json", "-o", model_arg], &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(stdout.lines().count(), 1, "--json prints one line");
+    let report: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    for key in ["samples", "paths", "sample_seconds", "train_seconds"] {
+        assert!(report[key].as_f64().unwrap() > 0.0, "{key} in {report}");
+    }
+    let networks = report["networks"].as_array().unwrap();
+    assert!(networks.len() >= 10, "{report}");
+    for n in networks {
+        assert!(["direct", "indirect"].contains(&n["component"].as_str().unwrap()));
+        assert!(n["object"].is_string() && n["samples"].as_u64().unwrap() > 0);
+        assert!(n["train_mse"].as_f64().unwrap().is_finite() && n["val_mse"].as_f64().unwrap().is_finite());
+    }
+    assert!(!dir.join("model.bake-cache").exists(), "sample shards are removed after a successful bake");
+
+    let png = dir.join("frame.png");
+    let out = rrf(
+        &[
+            "render",
+            "scenes/cornell-box",
+            "--cpu",
+            "--model",
+            model_arg,
+            "--size",
+            "64x64",
+            "-o",
+            png.to_str().unwrap(),
+        ],
+        &[],
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let image = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(image.dimensions(), (64, 64));
+    // The walls are red on the left and green on the right.
+    let left = image.get_pixel(5, 32);
+    let right = image.get_pixel(58, 32);
+    let dominant = |p: &image::Rgb<u8>, c: usize| (0..3).all(|o| o == c || f32::from(p[c]) > 1.5 * f32::from(p[o]));
+    assert!(dominant(left, 0), "left wall {left:?}");
+    assert!(dominant(right, 1), "right wall {right:?}");
+
+    // A model from another scene is refused with a clear error.
+    let out = rrf(&["render", "scenes/glossy-room", "--cpu", "--model", model_arg, "-o", png.to_str().unwrap()], &[]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("re-bake"));
+}
