@@ -1,14 +1,17 @@
 //! Levenberg–Marquardt training of one network.
 //!
 //! Each iteration accumulates JᵀJ (523 × 523) and Jᵀe over the training set in chunks of
-//! rows, never holding the whole Jacobian, then solves `(JᵀJ + λ·diag(JᵀJ)) δ = −Jᵀe` by
-//! Cholesky. λ shrinks after a step that lowers the training error and grows until one does.
+//! rows, never holding the whole Jacobian, then solves `(JᵀJ + λI) δ = −Jᵀe` by Cholesky.
+//! λ shrinks tenfold after a step that lowers the training error and grows tenfold until one
+//! does (Levenberg's damping, as Hagan and Menhaj use it for networks; Marquardt's
+//! `λ·diag(JᵀJ)` converged about twice as slowly on rrf's samples).
 //! The parameters with the lowest error on the held-out validation set are kept; training
 //! stops when that error has not improved for `patience` iterations.
 
 use std::time::Instant;
 
 use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::solvers::Solve;
 use faer::{Accum, Mat, Par, Side};
 
@@ -124,7 +127,18 @@ fn normal_equations(train: &Dataset, params: &[f64]) -> (Mat<f64>, Mat<f64>, f64
             }
         }
         let jt_chunk = jt.as_ref().subcols(0, rows);
-        matmul(jtj.as_mut(), Accum::Add, jt_chunk, jt_chunk.transpose(), 1.0, Par::Seq);
+        // Only the lower triangle: JᵀJ is symmetric and the Cholesky reads no more.
+        triangular::matmul(
+            jtj.as_mut(),
+            BlockStructure::TriangularLower,
+            Accum::Add,
+            jt_chunk,
+            BlockStructure::Rectangular,
+            jt_chunk.transpose(),
+            BlockStructure::Rectangular,
+            1.0,
+            Par::Seq,
+        );
         matmul(jte.as_mut(), Accum::Add, jt_chunk, e.as_ref().subrows(0, rows), 1.0, Par::Seq);
     }
     (jtj, jte, sse / (train.len() * OUTPUTS).max(1) as f64)
@@ -146,10 +160,10 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
         loop {
             let mut a = jtj.clone();
             for i in 0..PARAMETERS {
-                a[(i, i)] += lambda * (jtj[(i, i)] + 1e-9);
+                a[(i, i)] += lambda;
             }
             let Ok(llt) = a.llt(Side::Lower) else {
-                lambda *= 4.0;
+                lambda *= 10.0;
                 continue;
             };
             let step = llt.solve(jte.as_ref());
@@ -157,10 +171,10 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
             let candidate_loss = train.mse(&to_f32(&candidate));
             if candidate_loss.is_finite() && candidate_loss < loss {
                 params = candidate;
-                lambda = (lambda / 3.0).max(1e-9);
+                lambda = (lambda / 10.0).max(1e-9);
                 break;
             }
-            lambda *= 4.0;
+            lambda *= 10.0;
             if lambda > 1e10 {
                 break 'outer;
             }

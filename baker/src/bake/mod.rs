@@ -349,15 +349,24 @@ fn input_ranges(scene: &Scene, object: u32) -> ([f32; INPUTS], [f32; INPUTS]) {
     (lo, hi)
 }
 
-fn train_network(
+/// The training and validation sets of one network, normalised as the model records it.
+pub struct NetworkData {
+    pub train: Dataset,
+    pub validation: Dataset,
+    pub input_min: [f32; INPUTS],
+    pub input_max: [f32; INPUTS],
+    /// Targets are divided by this (their RMS).
+    pub output_scale: f32,
+}
+
+/// A deterministic random subset of `samples`, split into training and validation sets.
+pub fn network_data(
     scene: &Scene,
     settings: &BakeSettings,
     object: u32,
     component: Component,
     samples: &[&Sample],
-) -> (Network, NetworkInfo) {
-    let start = Instant::now();
-    // A deterministic random subset, then a train/validation split.
+) -> NetworkData {
     let mut order: Vec<usize> = (0..samples.len()).collect();
     let mut rng = Rng::new(settings.seed, 0x5eed_0000 + u64::from(object));
     for i in (1..order.len()).rev() {
@@ -373,17 +382,27 @@ fn train_network(
         let sum: f64 = order.iter().flat_map(|&i| target(samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
         ((sum / (order.len() * OUTPUTS) as f64).sqrt() as f32).max(1e-6)
     };
-    let encode = |s: &Sample| -> ([f32; INPUTS], [f32; OUTPUTS]) {
-        (std::array::from_fn(|i| normalize(s.inputs[i], input_min[i], input_max[i])), target(s).map(|v| v / rms))
-    };
     let validation_count = ((order.len() as f32 * settings.validation_fraction) as usize).max(1);
     let (mut train, mut validation) = (Dataset::default(), Dataset::default());
     for (n, &i) in order.iter().enumerate() {
-        let (x, t) = encode(samples[i]);
+        let s = samples[i];
         let set = if n < validation_count { &mut validation } else { &mut train };
-        set.inputs.push(x);
-        set.targets.push(t);
+        set.inputs.push(std::array::from_fn(|k| normalize(s.inputs[k], input_min[k], input_max[k])));
+        set.targets.push(target(s).map(|v| v / rms));
     }
+    NetworkData { train, validation, input_min, input_max, output_scale: rms }
+}
+
+fn train_network(
+    scene: &Scene,
+    settings: &BakeSettings,
+    object: u32,
+    component: Component,
+    samples: &[&Sample],
+) -> (Network, NetworkInfo) {
+    let start = Instant::now();
+    let NetworkData { train, validation, input_min, input_max, output_scale: rms } =
+        network_data(scene, settings, object, component, samples);
     let mut mean = [0.0f32; OUTPUTS];
     for t in &train.targets {
         (0..OUTPUTS).for_each(|c| mean[c] += t[c] / train.len() as f32);
@@ -405,7 +424,7 @@ fn train_network(
         input_max: input_max.to_vec(),
         target_transform: "scale".into(),
         output_scale: rms,
-        samples: order.len(),
+        samples: train.len() + validation.len(),
         train_mse: result.train_mse * scale2,
         val_mse: result.val_mse * scale2,
         iterations: result.iterations,
