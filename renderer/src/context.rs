@@ -12,8 +12,8 @@ use crate::device_info::DeviceInfo;
 use crate::error::{Error, Result, VkContext};
 use crate::validation::{messenger_info, Validation, ValidationLog};
 
-/// The Vulkan API version rrf is written against; shaders target SPIR-V 1.5 to match.
-pub const API_VERSION: u32 = vk::API_VERSION_1_2;
+/// The Vulkan API version rrf is written against (dynamic rendering is core in 1.3).
+pub const API_VERSION: u32 = vk::API_VERSION_1_3;
 
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
@@ -165,8 +165,12 @@ impl Context {
         let priorities = [1.0];
         let queues =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
-        let device_info =
-            vk::DeviceCreateInfo::default().queue_create_infos(&queues).enabled_extension_names(&device_extensions);
+        // Dynamic rendering (core in 1.3) replaces render pass objects for the G-buffer pass.
+        let mut vulkan13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true);
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_extension_names(&device_extensions)
+            .push_next(&mut vulkan13);
         // SAFETY: the physical device came from this instance; the create info outlives the call.
         let device = unsafe { instance.create_device(physical_device, &device_info, None) }.vk("vkCreateDevice")?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
@@ -364,7 +368,7 @@ fn universal_queue(
 ) -> std::result::Result<u32, String> {
     if props.api_version < API_VERSION {
         return Err(format!(
-            "it supports Vulkan {}.{}, rrf needs 1.2",
+            "it supports Vulkan {}.{}, rrf needs 1.3",
             vk::api_version_major(props.api_version),
             vk::api_version_minor(props.api_version)
         ));

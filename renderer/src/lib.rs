@@ -7,6 +7,7 @@ pub mod compute;
 pub mod context;
 pub mod device_info;
 pub mod error;
+pub mod gbuffer;
 pub mod resources;
 pub mod tonemap;
 pub mod validation;

@@ -23,7 +23,8 @@ const USAGE: &str = "\
 usage: cargo xtask <task>
 
 tasks:
-  run     install what rrf needs (apt-get), build it and run the main job on the default scene
+  run     install what rrf needs (apt-get), build it, and render the default scene from its
+          shipped model to frame.png
   test    install what the tests need (apt-get), then run every test on lavapipe with the
           Vulkan validation layer on
   setup   only install the system packages that the tests need
@@ -34,7 +35,8 @@ fn main() -> ExitCode {
     let result = match task.as_str() {
         "run" => install(RUN_PACKAGES)
             .and_then(|()| cargo(&["run", "--release", "--", "info"]))
-            .and_then(|()| cargo(&["run", "--release", "--", "info", DEFAULT_SCENE])),
+            .and_then(|()| cargo(&["run", "--release", "--", "info", DEFAULT_SCENE]))
+            .and_then(|()| cargo(&["run", "--release", "--", "render", DEFAULT_SCENE, "--cpu", "-o", "frame.png"])),
         "test" => install(&[RUN_PACKAGES, TEST_PACKAGES].concat())
             .and_then(|()| cargo(&["run", "--release", "--", "info"]))
             .and_then(|()| cargo(&["test", "--release", "--workspace"])),

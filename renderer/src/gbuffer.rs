@@ -1,0 +1,298 @@
+//! The G-buffer raster pass: per pixel, what the network pass needs (world position,
+//! roughness, shading normal, object id) and what the composite needs (emission).
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use gpu_allocator::MemoryLocation;
+
+use crate::context::Context;
+use crate::error::{Result, VkContext};
+use crate::resources::{Buffer, Image};
+
+/// One vertex, in world space. Triangles are listed vertex by vertex (no index buffer).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GBufferVertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    /// Emitted radiance (rgb) and roughness (w).
+    pub emission_roughness: [f32; 4],
+    pub object: u32,
+}
+
+/// Camera constants: a column-major view-projection matrix (Vulkan clip space: y down,
+/// depth 0..1) and the eye position.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub struct CameraConstants {
+    pub view_projection: [[f32; 4]; 4],
+    pub eye: [f32; 4],
+}
+
+pub const POSITION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub const NORMAL_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub const OBJECT_FORMAT: vk::Format = vk::Format::R32_UINT;
+pub const EMISSION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// The G-buffer's images, in `GENERAL` layout between passes.
+pub struct GBufferTargets {
+    /// xyz: world position; w: roughness.
+    pub position: Image,
+    /// xyz: shading normal facing the viewer.
+    pub normal: Image,
+    /// Object id + 1; 0 where nothing was drawn.
+    pub object: Image,
+    /// rgb: emitted radiance towards the viewer.
+    pub emission: Image,
+    depth: Image,
+    pub extent: vk::Extent2D,
+}
+
+impl GBufferTargets {
+    pub fn new(ctx: &Context, extent: vk::Extent2D) -> Result<Self> {
+        let color =
+            vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        let targets = GBufferTargets {
+            position: ctx.create_image("gbuffer position", extent, POSITION_FORMAT, color)?,
+            normal: ctx.create_image("gbuffer normal", extent, NORMAL_FORMAT, color)?,
+            object: ctx.create_image("gbuffer object", extent, OBJECT_FORMAT, color)?,
+            emission: ctx.create_image("gbuffer emission", extent, EMISSION_FORMAT, color)?,
+            depth: ctx.create_image(
+                "gbuffer depth",
+                extent,
+                DEPTH_FORMAT,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            )?,
+            extent,
+        };
+        ctx.submit_once(|cmd| {
+            for image in targets.colors() {
+                ctx.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
+            }
+            ctx.transition(cmd, &targets.depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+        })?;
+        Ok(targets)
+    }
+
+    fn colors(&self) -> [&Image; 4] {
+        [&self.position, &self.normal, &self.object, &self.emission]
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        for image in [self.position, self.normal, self.object, self.emission, self.depth] {
+            ctx.destroy_image(image);
+        }
+    }
+}
+
+/// The scene's triangles on the GPU.
+pub struct GBufferMesh {
+    buffer: Buffer,
+    vertex_count: u32,
+}
+
+impl GBufferMesh {
+    pub fn new(ctx: &Context, vertices: &[GBufferVertex]) -> Result<Self> {
+        let bytes: &[u8] = bytemuck::cast_slice(vertices);
+        let staging = ctx.create_buffer_with_data("mesh staging", bytes, vk::BufferUsageFlags::TRANSFER_SRC)?;
+        let buffer = ctx.create_buffer(
+            "scene vertices",
+            bytes.len() as u64,
+            vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        );
+        let buffer = match buffer {
+            Ok(b) => b,
+            Err(e) => {
+                ctx.destroy_buffer(staging);
+                return Err(e);
+            }
+        };
+        let copied = ctx.submit_once(|cmd| {
+            let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes.len() as u64 };
+            // SAFETY: both buffers hold at least `bytes.len()` bytes.
+            unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &[region]) };
+        });
+        ctx.destroy_buffer(staging);
+        copied?;
+        Ok(GBufferMesh { buffer, vertex_count: vertices.len() as u32 })
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        ctx.destroy_buffer(self.buffer);
+    }
+}
+
+pub struct GBufferPass {
+    pipeline: vk::Pipeline,
+    layout: vk::PipelineLayout,
+}
+
+impl GBufferPass {
+    /// `vertex` and `fragment` are the SPIR-V of `gbuffer.vert` and `gbuffer.frag`.
+    pub fn new(ctx: &Context, vertex: &[u32], fragment: &[u32]) -> Result<Self> {
+        let device = &ctx.device;
+        let push = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::VERTEX)
+            .size(std::mem::size_of::<CameraConstants>() as u32)];
+        // SAFETY: valid create infos that outlive the calls; objects destroyed in `destroy`.
+        unsafe {
+            let layout = device
+                .create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&push), None)
+                .vk("vkCreatePipelineLayout")?;
+            let vs = device
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(vertex), None)
+                .vk("vkCreateShaderModule")?;
+            let fs = device
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(fragment), None)
+                .vk("vkCreateShaderModule")?;
+            let stages = [
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::VERTEX)
+                    .module(vs)
+                    .name(c"main"),
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::FRAGMENT)
+                    .module(fs)
+                    .name(c"main"),
+            ];
+            let bindings = [vk::VertexInputBindingDescription::default()
+                .binding(0)
+                .stride(std::mem::size_of::<GBufferVertex>() as u32)
+                .input_rate(vk::VertexInputRate::VERTEX)];
+            let attributes = [
+                vk::VertexInputAttributeDescription::default()
+                    .location(0)
+                    .format(vk::Format::R32G32B32_SFLOAT)
+                    .offset(0),
+                vk::VertexInputAttributeDescription::default()
+                    .location(1)
+                    .format(vk::Format::R32G32B32_SFLOAT)
+                    .offset(12),
+                vk::VertexInputAttributeDescription::default()
+                    .location(2)
+                    .format(vk::Format::R32G32B32A32_SFLOAT)
+                    .offset(24),
+                vk::VertexInputAttributeDescription::default().location(3).format(vk::Format::R32_UINT).offset(40),
+            ];
+            let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(&bindings)
+                .vertex_attribute_descriptions(&attributes);
+            let assembly =
+                vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+            let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+            // The projection's y flip and Vulkan's y-down framebuffer cancel: front faces are
+            // counter-clockwise on screen, as in the scene.
+            let raster = vk::PipelineRasterizationStateCreateInfo::default()
+                .polygon_mode(vk::PolygonMode::FILL)
+                .cull_mode(vk::CullModeFlags::NONE)
+                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+                .line_width(1.0);
+            let multisample =
+                vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+            let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+                .depth_test_enable(true)
+                .depth_write_enable(true)
+                .depth_compare_op(vk::CompareOp::LESS);
+            let blend =
+                [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 4];
+            let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
+            let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+            let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+            let formats = [POSITION_FORMAT, NORMAL_FORMAT, OBJECT_FORMAT, EMISSION_FORMAT];
+            let mut rendering = vk::PipelineRenderingCreateInfo::default()
+                .color_attachment_formats(&formats)
+                .depth_attachment_format(DEPTH_FORMAT);
+            let info = vk::GraphicsPipelineCreateInfo::default()
+                .stages(&stages)
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&assembly)
+                .viewport_state(&viewport)
+                .rasterization_state(&raster)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&depth)
+                .color_blend_state(&blending)
+                .dynamic_state(&dynamic)
+                .layout(layout)
+                .push_next(&mut rendering);
+            let pipeline = device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None);
+            device.destroy_shader_module(vs, None);
+            device.destroy_shader_module(fs, None);
+            let pipeline = pipeline.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
+            ctx.set_name(pipeline, "gbuffer");
+            ctx.set_name(layout, "gbuffer");
+            Ok(GBufferPass { pipeline, layout })
+        }
+    }
+
+    /// Records the pass: clears the targets and draws `mesh` seen through `camera`. The color
+    /// targets are in `GENERAL` layout before and after.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        targets: &GBufferTargets,
+        mesh: &GBufferMesh,
+        camera: &CameraConstants,
+    ) {
+        let device = &ctx.device;
+        let clear = |c: vk::ClearColorValue| vk::ClearValue { color: c };
+        let zero = clear(vk::ClearColorValue { float32: [0.0; 4] });
+        let attachments: Vec<vk::RenderingAttachmentInfo> = targets
+            .colors()
+            .iter()
+            .map(|image| {
+                vk::RenderingAttachmentInfo::default()
+                    .image_view(image.view)
+                    .image_layout(vk::ImageLayout::GENERAL)
+                    .load_op(vk::AttachmentLoadOp::CLEAR)
+                    .store_op(vk::AttachmentStoreOp::STORE)
+                    .clear_value(if image.format == OBJECT_FORMAT {
+                        clear(vk::ClearColorValue { uint32: [0; 4] })
+                    } else {
+                        zero
+                    })
+            })
+            .collect();
+        let depth = vk::RenderingAttachmentInfo::default()
+            .image_view(targets.depth.view)
+            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+            .load_op(vk::AttachmentLoadOp::CLEAR)
+            .store_op(vk::AttachmentStoreOp::DONT_CARE)
+            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: targets.extent };
+        let info = vk::RenderingInfo::default()
+            .render_area(area)
+            .layer_count(1)
+            .color_attachments(&attachments)
+            .depth_attachment(&depth);
+        let viewport = vk::Viewport {
+            x: 0.0,
+            y: 0.0,
+            width: targets.extent.width as f32,
+            height: targets.extent.height as f32,
+            min_depth: 0.0,
+            max_depth: 1.0,
+        };
+        // SAFETY: `cmd` is recording outside a render pass; all objects belong to this device.
+        unsafe {
+            device.cmd_begin_rendering(cmd, &info);
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
+            device.cmd_set_viewport(cmd, 0, &[viewport]);
+            device.cmd_set_scissor(cmd, 0, &[area]);
+            device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::VERTEX, 0, bytemuck::bytes_of(camera));
+            device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.buffer.raw], &[0]);
+            device.cmd_draw(cmd, mesh.vertex_count, 1, 0, 0);
+            device.cmd_end_rendering(cmd);
+        }
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        // SAFETY: no GPU work that uses the pipeline is pending.
+        unsafe {
+            ctx.device.destroy_pipeline(self.pipeline, None);
+            ctx.device.destroy_pipeline_layout(self.layout, None);
+        }
+    }
+}

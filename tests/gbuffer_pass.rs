@@ -1,0 +1,98 @@
+//! The G-buffer raster pass against the path tracer's primary hits, pixel by pixel.
+
+mod common;
+
+use std::path::Path;
+
+use common::{finish_clean, gpu};
+use rrf::gpu_scene::{camera_constants, gbuffer_vertices};
+use rrf::shaders;
+use rrf_baker::glam::{Vec2, Vec3};
+use rrf_baker::scene::Scene;
+use rrf_baker::trace::{Camera, Geometry, World};
+use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets};
+use rrf_renderer::vk;
+
+fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
+    let scene = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene_name)).unwrap();
+    let view = scene.view(view_name).unwrap().clone();
+    let aspect = width as f32 / height as f32;
+
+    let ctx = gpu();
+    let extent = vk::Extent2D { width, height };
+    let targets = GBufferTargets::new(&ctx, extent).unwrap();
+    let mesh = GBufferMesh::new(&ctx, &gbuffer_vertices(&scene, Vec3::ZERO)).unwrap();
+    let pass = GBufferPass::new(&ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG).unwrap();
+    ctx.submit_once(|cmd| pass.record(&ctx, cmd, &targets, &mesh, &camera_constants(&view, aspect))).unwrap();
+    let position = ctx.read_image(&targets.position, vk::ImageLayout::GENERAL).unwrap();
+    let normal = ctx.read_image(&targets.normal, vk::ImageLayout::GENERAL).unwrap();
+    let object = ctx.read_image(&targets.object, vk::ImageLayout::GENERAL).unwrap();
+    let emission = ctx.read_image(&targets.emission, vk::ImageLayout::GENERAL).unwrap();
+    pass.destroy(&ctx);
+    mesh.destroy(&ctx);
+    targets.destroy(&ctx);
+    finish_clean(ctx);
+
+    let geometry = Geometry::new(&scene);
+    let world = World::new(&scene, &geometry, None);
+    let camera = Camera::new(&view, aspect);
+    let id_at = |x: i64, y: i64| -> Option<u32> {
+        if x < 0 || y < 0 || x >= width as i64 || y >= height as i64 {
+            return None;
+        }
+        let film = (Vec2::new(x as f32, y as f32) + 0.5) / Vec2::new(width as f32, height as f32);
+        let dir = camera.direction(film);
+        world.intersect(camera.eye, dir).map(|h| geometry.triangles[h.triangle as usize].object + 1)
+    };
+    let (mut same_id, mut interior, mut checked) = (0usize, 0usize, 0usize);
+    let mut worst_position = 0.0f32;
+    let mut worst_normal = 0.0f32;
+    for y in 0..height as i64 {
+        for x in 0..width as i64 {
+            let i = (y as usize * width as usize + x as usize) * 4;
+            let gpu_id = object[i / 4] as u32;
+            let cpu_id = id_at(x, y).unwrap_or(0);
+            same_id += usize::from(gpu_id == cpu_id);
+            // Away from silhouettes: the same object all around.
+            let neighbours = [(-1, 0), (1, 0), (0, -1), (0, 1)]
+                .iter()
+                .all(|(dx, dy)| id_at(x + dx, y + dy).is_none_or(|n| n == cpu_id));
+            if cpu_id == 0 || !neighbours || gpu_id != cpu_id {
+                continue;
+            }
+            interior += 1;
+            let film = (Vec2::new(x as f32, y as f32) + 0.5) / Vec2::new(width as f32, height as f32);
+            let dir = camera.direction(film);
+            let hit = world.intersect(camera.eye, dir).unwrap();
+            let si = world.interaction(camera.eye, dir, hit);
+            let p = Vec3::new(position[i], position[i + 1], position[i + 2]);
+            let n = Vec3::new(normal[i], normal[i + 1], normal[i + 2]);
+            let scale = (si.position - camera.eye).length();
+            worst_position = worst_position.max((p - si.position).length() / scale);
+            worst_normal = worst_normal.max((n - si.shading_normal).length());
+            assert!((position[i + 3] - si.roughness).abs() < 1e-6);
+            let e = Vec3::new(emission[i], emission[i + 1], emission[i + 2]);
+            assert!((e - si.emission).abs().max_element() < 1e-4, "emission {e} vs {}", si.emission);
+            checked += 1;
+        }
+    }
+    let pixels = (width * height) as usize;
+    eprintln!(
+        "{scene_name}/{view_name}: object id equal on {same_id}/{pixels}; {checked} interior pixels, worst position error \
+         {worst_position:.2e} of the distance, worst normal error {worst_normal:.2e}"
+    );
+    assert!(same_id as f64 >= 0.999 * pixels as f64, "object id equal on only {same_id} of {pixels} pixels");
+    assert!(interior > pixels / 2);
+    assert!(worst_position < 1e-4, "position error {worst_position}");
+    assert!(worst_normal < 1e-3, "normal error {worst_normal}");
+}
+
+#[test]
+fn gbuffer_matches_primary_hits_cornell_box() {
+    compare("cornell-box", "default", 96, 96);
+}
+
+#[test]
+fn gbuffer_matches_primary_hits_many_objects() {
+    compare("many-objects", "table", 120, 80);
+}
