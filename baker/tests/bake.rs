@@ -116,3 +116,21 @@ fn model_round_trips_and_refuses_bad_files() {
     let message = error(&write("not-a-model.safetensors", b"hello"), None);
     assert!(message.contains("not a valid model file"), "{message}");
 }
+
+/// The models shipped beside the scenes load against them: a scene changed without a re-bake
+/// fails here (its content hash no longer matches).
+#[test]
+fn shipped_models_load() {
+    for name in ["cornell-box", "glossy-room", "many-objects"] {
+        let scene = scene(name);
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(name).join("model.safetensors");
+        let model = Model::load(&path, Some(&scene)).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(model.metadata.bake["quality"], "final", "{name} ships a final model");
+        for object in &scene.objects {
+            let emissive = object.parts.iter().all(|p| scene.materials[p.material as usize].is_emissive());
+            let untrained = model.metadata.untrained.iter().any(|u| u.object == object.name);
+            let has = model.network(&object.name, Component::Direct).is_some();
+            assert_eq!(has, !emissive && !untrained, "{name}: {}", object.name);
+        }
+    }
+}
