@@ -41,6 +41,8 @@ enum Command {
     Bake(rrf::commands::bake::BakeArgs),
     /// Render one frame from a baked model: each pixel's object networks give its direct and
     /// indirect light; emitters show their emission.
+    ///
+    /// On the Vulkan device by default (RRF_DEVICE picks one); --cpu for the CPU reference.
     Render(rrf::commands::render::RenderArgs),
 }
 

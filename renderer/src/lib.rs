@@ -8,6 +8,7 @@ pub mod context;
 pub mod device_info;
 pub mod error;
 pub mod gbuffer;
+pub mod network_pass;
 pub mod resources;
 pub mod tonemap;
 pub mod validation;

@@ -5,13 +5,16 @@ use std::time::Instant;
 
 use anyhow::{bail, Result};
 use clap::Args;
+use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
-use rrf_baker::scene::Scene;
+use rrf_baker::scene::{Scene, View};
 use rrf_baker::trace::{Camera, Geometry, World};
+use rrf_renderer::{vk, Context, ContextOptions};
 
 use super::bake::default_model_path;
 use super::view_args::{Component, ViewArgs};
+use crate::gpu_frame::GpuFrame;
 use crate::image_out::write_image;
 
 #[derive(Args, Debug)]
@@ -25,7 +28,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = Component::Gi)]
     pub component: Component,
     /// Evaluate the networks on the CPU with the baker's reference inference (primary hits
-    /// by ray casting) instead of on the GPU.
+    /// by ray casting) instead of on the Vulkan device (G-buffer pass, then network pass).
     #[arg(long)]
     pub cpu: bool,
     /// Output: .exr (linear HDR) or .png (tonemapped).
@@ -34,9 +37,6 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
-    if !args.cpu {
-        bail!("the Vulkan network pass is not built yet; render on the CPU with --cpu");
-    }
     let (width, height) = args.view.size()?;
     let scene = Scene::load(&args.view.scene)?;
     let model_path = args.model.clone().unwrap_or_else(|| default_model_path(&scene));
@@ -46,14 +46,53 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     let view = args.view.resolve_view(&scene)?;
     let light = args.view.light_position(&scene)?;
-    let geometry = Geometry::new(&scene);
-    let world = World::new(&scene, &geometry, light);
-    let camera = Camera::new(&view, width as f32 / height as f32);
     let start = Instant::now();
-    let image = predict_image(&world, &camera, &model, width, height);
+    let (pixels, how) = if args.cpu {
+        let geometry = Geometry::new(&scene);
+        let world = World::new(&scene, &geometry, light);
+        let camera = Camera::new(&view, width as f32 / height as f32);
+        let image = predict_image(&world, &camera, &model, width, height);
+        (image.component(|r| args.component.pick(r)), "CPU inference".to_string())
+    } else {
+        gpu_render(&scene, &model, &view, light, width, height, args.component)?
+    };
     let seconds = start.elapsed().as_secs_f64();
-    let pixels = image.component(|r| args.component.pick(r));
     write_image(&args.output, width, height, &pixels, args.view.exposure)?;
-    eprintln!("wrote {} ({width}x{height}, CPU inference, {:.0} ms)", args.output.display(), seconds * 1e3);
+    eprintln!("wrote {} ({width}x{height}, {how}, {:.0} ms)", args.output.display(), seconds * 1e3);
     Ok(())
+}
+
+/// Renders on the Vulkan device; returns the pixels and which device did it.
+fn gpu_render(
+    scene: &Scene,
+    model: &Model,
+    view: &View,
+    light: Option<Vec3>,
+    width: u32,
+    height: u32,
+    component: Component,
+) -> Result<(Vec<Vec3>, String)> {
+    let ctx = Context::new(&ContextOptions::from_env())?;
+    let default_light = scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position);
+    let light = light.unwrap_or(default_light);
+    let frame = GpuFrame::new(&ctx, scene, model, vk::Extent2D { width, height }, light - default_light)?;
+    let rendered = frame.render(&ctx, view, light);
+    frame.destroy(&ctx);
+    let device = ctx.info.name.clone();
+    let report = ctx.finish();
+    if !report.is_clean() {
+        bail!(
+            "Vulkan reported {} validation messages (printed above); leaked {:?}",
+            report.validation_messages,
+            report.leaked
+        );
+    }
+    let rendered = rendered?;
+    let rgba = match component {
+        Component::Gi => &rendered.gi,
+        Component::Direct => &rendered.direct,
+        Component::Indirect => &rendered.indirect,
+        Component::Emitted => bail!("--component emitted is only available from `rrf reference`"),
+    };
+    Ok((rgba.chunks_exact(4).map(|p| Vec3::new(p[0], p[1], p[2])).collect(), device))
 }

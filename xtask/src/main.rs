@@ -36,7 +36,7 @@ fn main() -> ExitCode {
         "run" => install(RUN_PACKAGES)
             .and_then(|()| cargo(&["run", "--release", "--", "info"]))
             .and_then(|()| cargo(&["run", "--release", "--", "info", DEFAULT_SCENE]))
-            .and_then(|()| cargo(&["run", "--release", "--", "render", DEFAULT_SCENE, "--cpu", "-o", "frame.png"])),
+            .and_then(|()| cargo(&["run", "--release", "--", "render", DEFAULT_SCENE, "-o", "frame.png"])),
         "test" => install(&[RUN_PACKAGES, TEST_PACKAGES].concat())
             .and_then(|()| cargo(&["run", "--release", "--", "info"]))
             .and_then(|()| cargo(&["test", "--release", "--workspace"])),

@@ -1,0 +1,59 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// Network pass, weights in a storage buffer: per pixel, the 13 inputs from the G-buffer and
+// the constants, then that object's direct and indirect networks.
+//
+// Per object slot (object id), OBJECT_STRIDE floats: direct parameters, indirect parameters,
+// input_min[13], input_max[13], direct output scale, indirect output scale, present (1 or 0).
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(binding = 0, rgba32f) uniform readonly image2D gbuffer_position;
+layout(binding = 1, rgba32f) uniform readonly image2D gbuffer_normal;
+layout(binding = 2, r32ui) uniform readonly uimage2D gbuffer_object;
+layout(binding = 3, rgba32f) uniform readonly image2D gbuffer_emission;
+layout(binding = 4) readonly buffer Weights { float weights[]; };
+layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
+
+layout(push_constant) uniform Constants {
+    vec4 eye;
+    vec4 light;
+} constants;
+
+#include "network.glsl"
+
+#define OBJECT_STRIDE (2 * PARAMETERS + 2 * INPUTS + 3)
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(pixel, imageSize(out_gi)))) {
+        return;
+    }
+    uint id = imageLoad(gbuffer_object, pixel).r;
+    vec3 emission = imageLoad(gbuffer_emission, pixel).rgb;
+    vec3 direct = vec3(0.0);
+    vec3 indirect = vec3(0.0);
+    if (id > 0u) {
+        uint base = (id - 1u) * OBJECT_STRIDE;
+        uint ranges = base + 2 * PARAMETERS;
+        if (weights[ranges + 2 * INPUTS + 2] > 0.5) {
+            vec4 position_roughness = imageLoad(gbuffer_position, pixel);
+            vec3 p = position_roughness.xyz;
+            vec3 n = imageLoad(gbuffer_normal, pixel).xyz;
+            vec3 v = normalize(constants.eye.xyz - p);
+            float raw[INPUTS] = float[INPUTS](p.x, p.y, p.z, v.x, v.y, v.z, constants.light.x, constants.light.y,
+                                              constants.light.z, n.x, n.y, n.z, position_roughness.w);
+            float x[INPUTS];
+            for (int i = 0; i < INPUTS; ++i) {
+                x[i] = normalize_input(raw[i], weights[ranges + i], weights[ranges + INPUTS + i]);
+            }
+            direct = forward(base, x) * weights[ranges + 2 * INPUTS];
+            indirect = forward(base + PARAMETERS, x) * weights[ranges + 2 * INPUTS + 1];
+        }
+    }
+    imageStore(out_direct, pixel, vec4(direct, 1.0));
+    imageStore(out_indirect, pixel, vec4(indirect, 1.0));
+    imageStore(out_gi, pixel, vec4(emission + direct + indirect, 1.0));
+}

@@ -1,0 +1,86 @@
+//! One frame on the GPU: the G-buffer pass, then the network pass, for a scene and a model.
+
+use anyhow::Result;
+use rrf_baker::glam::Vec3;
+use rrf_baker::model::Model;
+use rrf_baker::network::Component;
+use rrf_baker::scene::{Scene, View};
+use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets};
+use rrf_renderer::network_pass::{pack_weights, NetworkConstants, NetworkPass, ObjectNetworks};
+use rrf_renderer::{vk, Context};
+
+use crate::gpu_scene::{camera_constants, gbuffer_vertices};
+use crate::shaders;
+
+/// Per-object network slots for the network pass, by object id.
+pub fn network_weights(scene: &Scene, model: &Model) -> Result<Vec<f32>> {
+    let objects: Vec<Option<ObjectNetworks>> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            let direct = model.network(&o.name, Component::Direct)?;
+            let indirect = model.network(&o.name, Component::Indirect)?;
+            Some(ObjectNetworks {
+                direct: &direct.params,
+                indirect: &indirect.params,
+                input_min: direct.input_min,
+                input_max: direct.input_max,
+                direct_scale: direct.output_scale,
+                indirect_scale: indirect.output_scale,
+            })
+        })
+        .collect();
+    Ok(pack_weights(&objects)?)
+}
+
+/// Images of one frame, read back: RGBA per pixel, rows top to bottom.
+pub struct FramePixels {
+    pub direct: Vec<f32>,
+    pub indirect: Vec<f32>,
+    pub gi: Vec<f32>,
+}
+
+pub struct GpuFrame {
+    targets: GBufferTargets,
+    mesh: GBufferMesh,
+    gbuffer: GBufferPass,
+    network: NetworkPass,
+}
+
+impl GpuFrame {
+    /// Everything for frames of `scene` at `extent`, with the moving light `light_offset` from
+    /// where the glTF puts it.
+    pub fn new(ctx: &Context, scene: &Scene, model: &Model, extent: vk::Extent2D, light_offset: Vec3) -> Result<Self> {
+        let targets = GBufferTargets::new(ctx, extent)?;
+        let mesh = GBufferMesh::new(ctx, &gbuffer_vertices(scene, light_offset))?;
+        let gbuffer = GBufferPass::new(ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG)?;
+        let network = NetworkPass::new(ctx, shaders::NETWORK_STORAGE_COMP, &targets, &network_weights(scene, model)?)?;
+        Ok(GpuFrame { targets, mesh, gbuffer, network })
+    }
+
+    /// Renders `view` with the light at `light` and reads the HDR images back.
+    pub fn render(&self, ctx: &Context, view: &View, light: Vec3) -> Result<FramePixels> {
+        let extent = self.targets.extent;
+        let camera = camera_constants(view, extent.width as f32 / extent.height as f32);
+        let constants = NetworkConstants { eye: camera.eye, light: light.extend(1.0).to_array() };
+        ctx.submit_once(|cmd| {
+            self.gbuffer.record(ctx, cmd, &self.targets, &self.mesh, &camera);
+            ctx.memory_barrier(
+                cmd,
+                (vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags::COLOR_ATTACHMENT_WRITE),
+                (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
+            );
+            self.network.record(ctx, cmd, extent, &constants);
+        })?;
+        let read = |image| ctx.read_image(image, vk::ImageLayout::GENERAL);
+        let outputs = &self.network.outputs;
+        Ok(FramePixels { direct: read(&outputs.direct)?, indirect: read(&outputs.indirect)?, gi: read(&outputs.gi)? })
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        self.network.destroy(ctx);
+        self.gbuffer.destroy(ctx);
+        self.mesh.destroy(ctx);
+        self.targets.destroy(ctx);
+    }
+}

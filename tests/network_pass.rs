@@ -1,0 +1,67 @@
+//! The GPU network pass against the CPU reference inference (`rrf render --cpu`), every
+//! component, pixel by pixel, with the shipped models.
+
+mod common;
+
+use std::path::Path;
+
+use common::{finish_clean, gpu};
+use rrf::gpu_frame::GpuFrame;
+use rrf_baker::glam::Vec3;
+use rrf_baker::model::Model;
+use rrf_baker::predict::predict_image;
+use rrf_baker::scene::Scene;
+use rrf_baker::trace::{Camera, Geometry, Radiance, World};
+use rrf_renderer::vk;
+
+/// One component of the CPU's radiance.
+type Pick = fn(&Radiance) -> Vec3;
+
+fn compare(scene_name: &str, view_name: &str, light: Vec3, width: u32, height: u32) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene_name);
+    let scene = Scene::load(&dir).unwrap();
+    let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
+    let view = scene.view(view_name).unwrap().clone();
+    let offset = light - scene.moving_light.as_ref().unwrap().default_position;
+
+    let ctx = gpu();
+    let frame = GpuFrame::new(&ctx, &scene, &model, vk::Extent2D { width, height }, offset).unwrap();
+    let pixels = frame.render(&ctx, &view, light).unwrap();
+    frame.destroy(&ctx);
+    finish_clean(ctx);
+
+    let geometry = Geometry::new(&scene);
+    let world = World::new(&scene, &geometry, Some(light));
+    let cpu = predict_image(&world, &Camera::new(&view, width as f32 / height as f32), &model, width, height);
+
+    let components: [(&str, &Vec<f32>, Pick); 3] = [
+        ("direct", &pixels.direct, |r| r.direct),
+        ("indirect", &pixels.indirect, |r| r.indirect),
+        ("gi", &pixels.gi, |r| r.gi()),
+    ];
+    for (name, gpu_pixels, pick) in components {
+        let mut within = 0;
+        let mut worst = 0.0f32;
+        for (i, r) in cpu.pixels.iter().enumerate() {
+            let c = pick(r);
+            let g = Vec3::new(gpu_pixels[4 * i], gpu_pixels[4 * i + 1], gpu_pixels[4 * i + 2]);
+            // Relative error per pixel, with an absolute floor far below what a display shows.
+            let error = ((g - c).abs() / (c.abs() + Vec3::splat(1e-3))).max_element();
+            worst = worst.max(error);
+            within += usize::from(error <= 1e-3);
+        }
+        let n = cpu.pixels.len();
+        eprintln!("{scene_name} {name}: {within}/{n} pixels within 1e-3 relative, worst {worst:.2e}");
+        assert!(within as f64 >= 0.999 * n as f64, "{scene_name} {name}: only {within} of {n} pixels within 1e-3");
+    }
+}
+
+#[test]
+fn gpu_matches_cpu_inference_cornell_box() {
+    compare("cornell-box", "default", Vec3::new(0.2, 0.5, 0.35), 96, 96);
+}
+
+#[test]
+fn gpu_matches_cpu_inference_many_objects() {
+    compare("many-objects", "table", Vec3::new(0.8, 2.2, -0.5), 120, 80);
+}
