@@ -44,6 +44,10 @@ enum Command {
     ///
     /// On the Vulkan device by default (RRF_DEVICE picks one); --cpu for the CPU reference.
     Render(rrf::commands::render::RenderArgs),
+    /// Time the GPU passes (G-buffer, network, tonemap) with timestamp queries, median over
+    /// frames, and report network evaluations per second. Runs without the validation layer
+    /// unless RRF_VALIDATION is set.
+    Bench(rrf::commands::bench::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -53,6 +57,7 @@ fn main() -> ExitCode {
         Command::Reference(args) => rrf::commands::reference::run(&args),
         Command::Bake(args) => rrf::commands::bake::run(&args),
         Command::Render(args) => rrf::commands::render::run(&args),
+        Command::Bench(args) => rrf::commands::bench::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

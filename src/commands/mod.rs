@@ -1,6 +1,7 @@
 //! One module per `rrf` subcommand.
 
 pub mod bake;
+pub mod bench;
 pub mod info;
 pub mod reference;
 pub mod render;

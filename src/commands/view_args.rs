@@ -53,6 +53,18 @@ impl Component {
     }
 }
 
+/// `WxH`, each between 1 and 16384.
+pub fn parse_size(text: &str) -> Result<(u32, u32)> {
+    let parse = || -> Option<(u32, u32)> {
+        let (w, h) = text.split_once(['x', 'X'])?;
+        Some((w.trim().parse().ok()?, h.trim().parse().ok()?))
+    };
+    match parse() {
+        Some((w, h)) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => Ok((w, h)),
+        _ => bail!("--size {text:?}: expected WxH with each between 1 and 16384, e.g. 512x512"),
+    }
+}
+
 pub fn parse_vec3(text: &str, what: &str) -> Result<Vec3> {
     let parts: Vec<&str> = text.split(',').collect();
     if parts.len() != 3 {
@@ -70,14 +82,7 @@ pub fn parse_vec3(text: &str, what: &str) -> Result<Vec3> {
 
 impl ViewArgs {
     pub fn size(&self) -> Result<(u32, u32)> {
-        let parse = || -> Option<(u32, u32)> {
-            let (w, h) = self.size.split_once(['x', 'X'])?;
-            Some((w.trim().parse().ok()?, h.trim().parse().ok()?))
-        };
-        match parse() {
-            Some((w, h)) if (1..=16384).contains(&w) && (1..=16384).contains(&h) => Ok((w, h)),
-            _ => bail!("--size {:?}: expected WxH with each between 1 and 16384, e.g. 512x512", self.size),
-        }
+        parse_size(&self.size)
     }
 
     /// The view to render: `--view`, `--camera`, or the scene's default.

@@ -1,0 +1,167 @@
+//! `rrf bench`: GPU time per pass from timestamp queries, median over frames.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context as _, Result};
+use clap::{Args, ValueEnum};
+use rrf_baker::model::Model;
+use rrf_baker::network::Component;
+use rrf_baker::scene::Scene;
+use rrf_renderer::{vk, Context, ContextOptions, Validation};
+use serde_json::json;
+
+use super::bake::default_model_path;
+use crate::gpu_frame::{GpuFrame, TIMESTAMPS};
+
+/// Multiply-adds of one 13 → 20 → 10 → 3 network: 13·20 + 20·10 + 10·3.
+const MULTIPLY_ADDS: f64 = 490.0;
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// Weights in a storage buffer, indexed by object id (network_storage.comp).
+    Storage,
+    /// Every variant, one after the other.
+    All,
+}
+
+#[derive(Args, Debug)]
+pub struct BenchArgs {
+    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    pub scene: PathBuf,
+    /// Model file; default: model.safetensors in the scene's folder.
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// A named view; default: the glTF camera.
+    #[arg(long)]
+    pub view: Option<String>,
+    /// Frame size in pixels.
+    #[arg(long, default_value = "512x512", value_name = "WxH")]
+    pub size: String,
+    /// Frames to time (after two warm-up frames).
+    #[arg(long, default_value_t = 30)]
+    pub frames: u32,
+    /// How the networks reach the shader.
+    #[arg(long, value_enum, default_value_t = Variant::All)]
+    pub variant: Variant,
+    /// The device's fp32 peak in GFLOP/s, to report the fraction the network pass reaches.
+    #[arg(long)]
+    pub peak_gflops: Option<f64>,
+    /// Print one line of JSON per variant.
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+pub fn run(args: &BenchArgs) -> Result<()> {
+    let (width, height) = super::view_args::parse_size(&args.size)?;
+    if args.frames == 0 {
+        bail!("--frames must be at least 1");
+    }
+    let scene = Scene::load(&args.scene)?;
+    let model = Model::load(&args.model.clone().unwrap_or_else(|| default_model_path(&scene)), Some(&scene))?;
+    let view = match &args.view {
+        Some(name) => scene.view(name).cloned().with_context(|| format!("--view {name:?}: no such view"))?,
+        None => scene.views.first().cloned().context("the scene has no camera")?,
+    };
+    let light = scene.moving_light.as_ref().map(|l| l.default_position).unwrap_or_default();
+    // Timing runs without the validation layer unless RRF_VALIDATION asks for it.
+    let mut options = ContextOptions::from_env();
+    if std::env::var_os("RRF_VALIDATION").is_none() {
+        options.validation = Validation::Off;
+    }
+    let ctx = Context::new(&options)?;
+    let Some(period_ns) = ctx.info.limits.timestamp_period_ns else {
+        bail!("{} cannot write timestamps on its queue", ctx.info.name);
+    };
+    let frame = GpuFrame::new(&ctx, &scene, &model, vk::Extent2D { width, height }, rrf_baker::glam::Vec3::ZERO)?;
+    let pool_info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(TIMESTAMPS);
+    // SAFETY: a plain query pool, destroyed below.
+    let pool = unsafe { ctx.device.create_query_pool(&pool_info, None) }.context("vkCreateQueryPool")?;
+
+    let result = (|| -> Result<Vec<serde_json::Value>> {
+        let (mut gbuffer, mut network, mut tonemap, mut cpu) = (vec![], vec![], vec![], vec![]);
+        for i in 0..args.frames + 2 {
+            let start = Instant::now();
+            ctx.submit_once(|cmd| frame.record(&ctx, cmd, &view, light, 1.0, Some(pool)))?;
+            let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+            let mut stamps = [0u64; TIMESTAMPS as usize];
+            // SAFETY: the frame has finished; the pool holds TIMESTAMPS 64-bit results.
+            unsafe {
+                ctx.device.get_query_pool_results(
+                    pool,
+                    0,
+                    &mut stamps,
+                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                )
+            }
+            .context("vkGetQueryPoolResults")?;
+            if i < 2 {
+                continue; // warm-up
+            }
+            let ms = |a: usize, b: usize| (stamps[b].wrapping_sub(stamps[a])) as f64 * f64::from(period_ns) * 1e-6;
+            gbuffer.push(ms(0, 1));
+            network.push(ms(1, 2));
+            tonemap.push(ms(2, 3));
+            cpu.push(cpu_ms);
+        }
+        // Networks evaluated per frame: two per pixel of an object that has them.
+        let objects = frame.read_objects(&ctx)?;
+        let trained: Vec<bool> =
+            scene.objects.iter().map(|o| model.network(&o.name, Component::Direct).is_some()).collect();
+        let evaluations = 2 * objects.iter().filter(|&&id| id > 0 && trained[id as usize - 1]).count();
+        let network_ms = median(network);
+        let per_s = evaluations as f64 / (network_ms * 1e-3);
+        let gflops = per_s * 2.0 * MULTIPLY_ADDS * 1e-9;
+        Ok(vec![json!({
+            "device": ctx.info.name,
+            "variant": "storage",
+            "scene": scene.name,
+            "width": width,
+            "height": height,
+            "frames": args.frames,
+            "gbuffer_ms": median(gbuffer),
+            "network_ms": network_ms,
+            "tonemap_ms": median(tonemap),
+            "frame_ms": median(cpu),
+            "networks_per_frame": evaluations,
+            "network_pixels_per_s": per_s,
+            "network_gflops": gflops,
+            "peak_fraction": args.peak_gflops.map(|p| gflops / p),
+        })])
+    })();
+    // SAFETY: no work is pending.
+    unsafe { ctx.device.destroy_query_pool(pool, None) };
+    frame.destroy(&ctx);
+    let report = ctx.finish();
+    let rows = result?;
+    if !report.is_clean() {
+        bail!("Vulkan reported {} validation messages; leaked {:?}", report.validation_messages, report.leaked);
+    }
+    for row in rows {
+        if args.json {
+            println!("{row}");
+        } else {
+            println!(
+                "{} {} on {}, {}x{}, median of {} frames:\n  G-buffer {:.2} ms, network {:.2} ms, tonemap {:.2} ms; frame (CPU, submit to finish) {:.2} ms\n  {:.1} M network-pixels/s ({:.1} GFLOP/s)",
+                row["scene"].as_str().unwrap_or_default(),
+                row["variant"].as_str().unwrap_or_default(),
+                row["device"].as_str().unwrap_or_default(),
+                width,
+                height,
+                args.frames,
+                row["gbuffer_ms"].as_f64().unwrap_or_default(),
+                row["network_ms"].as_f64().unwrap_or_default(),
+                row["tonemap_ms"].as_f64().unwrap_or_default(),
+                row["frame_ms"].as_f64().unwrap_or_default(),
+                row["network_pixels_per_s"].as_f64().unwrap_or_default() / 1e6,
+                row["network_gflops"].as_f64().unwrap_or_default(),
+            );
+        }
+    }
+    Ok(())
+}

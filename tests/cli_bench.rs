@@ -1,0 +1,33 @@
+//! `rrf bench --json`: one line per variant with the fields the issue names. It times
+//! nothing here; it only checks that the figures are there and sane.
+
+mod common;
+
+use common::rrf;
+
+#[test]
+fn bench_prints_the_figures() {
+    let out = rrf(
+        &["bench", "scenes/cornell-box", "--size", "32x32", "--frames", "2", "--json", "--peak-gflops", "250"],
+        &[],
+    );
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    for line in stdout.lines() {
+        let row: serde_json::Value = serde_json::from_str(line).unwrap();
+        assert!(row["device"].as_str().unwrap().contains("llvmpipe"));
+        assert_eq!(row["variant"], "storage");
+        assert_eq!(
+            (row["width"].as_u64(), row["height"].as_u64(), row["frames"].as_u64()),
+            (Some(32), Some(32), Some(2))
+        );
+        for key in ["gbuffer_ms", "network_ms", "tonemap_ms", "frame_ms", "network_pixels_per_s", "peak_fraction"] {
+            let v = row[key].as_f64().unwrap_or_else(|| panic!("{key} missing in {row}"));
+            assert!(v.is_finite() && v > 0.0, "{key} = {v}");
+        }
+        // Two networks per pixel that shows a trained object: most of the frame.
+        let evaluations = row["networks_per_frame"].as_u64().unwrap();
+        assert!(evaluations > 1000 && evaluations <= 2 * 32 * 32, "{evaluations}");
+    }
+    assert_eq!(stdout.lines().count(), 1, "one variant so far");
+}
