@@ -15,29 +15,16 @@ use std::time::Instant;
 use rrf_baker::bake::lm::{self, initial_parameters, Dataset, LmSettings};
 use rrf_baker::bake::samples::{latin_hypercube, sample_configuration};
 use rrf_baker::bake::{network_data, BakeSettings, Quality};
-use rrf_baker::network::{Component, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
+use rrf_baker::network::{
+    hidden_layers, Component, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3,
+};
 use rrf_baker::scene::Scene;
 use rrf_baker::trace::sampling::Rng;
 use rrf_baker::trace::Geometry;
 
 /// Adds ∂/∂p of Σ_c (y_c − t_c)² for one sample to `grad`; returns the squared error.
 fn add_gradient(p: &[f32], x: &[f32; INPUTS], t: &[f32; OUTPUTS], grad: &mut [f32]) -> f32 {
-    let mut h1 = [0.0f32; HIDDEN1];
-    for j in 0..HIDDEN1 {
-        let mut s = p[B1 + j];
-        for i in 0..INPUTS {
-            s += p[W1 + j * INPUTS + i] * x[i];
-        }
-        h1[j] = s.tanh();
-    }
-    let mut h2 = [0.0f32; HIDDEN2];
-    for k in 0..HIDDEN2 {
-        let mut s = p[B2 + k];
-        for j in 0..HIDDEN1 {
-            s += p[W2 + k * HIDDEN1 + j] * h1[j];
-        }
-        h2[k] = s.tanh();
-    }
+    let (h1, h2) = hidden_layers(p, x);
     let mut dy = [0.0f32; OUTPUTS];
     let mut sse = 0.0;
     for c in 0..OUTPUTS {

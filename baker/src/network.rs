@@ -94,9 +94,26 @@ impl Network {
     }
 }
 
-/// The network on normalised inputs.
-pub fn forward(p: &[f32], x: &[f32; INPUTS]) -> [f32; OUTPUTS] {
-    let mut h1 = [0.0f32; HIDDEN1];
+/// The float types the network runs in: f32 for inference, f64 for training.
+pub trait Real: Copy + Default + std::ops::Mul<Output = Self> + std::ops::AddAssign {
+    fn tanh(self) -> Self;
+}
+
+impl Real for f32 {
+    fn tanh(self) -> Self {
+        f32::tanh(self)
+    }
+}
+
+impl Real for f64 {
+    fn tanh(self) -> Self {
+        f64::tanh(self)
+    }
+}
+
+/// The two tanh layers on normalised inputs.
+pub fn hidden_layers<T: Real>(p: &[T], x: &[T; INPUTS]) -> ([T; HIDDEN1], [T; HIDDEN2]) {
+    let mut h1 = [T::default(); HIDDEN1];
     for j in 0..HIDDEN1 {
         let mut s = p[B1 + j];
         for i in 0..INPUTS {
@@ -104,7 +121,7 @@ pub fn forward(p: &[f32], x: &[f32; INPUTS]) -> [f32; OUTPUTS] {
         }
         h1[j] = s.tanh();
     }
-    let mut h2 = [0.0f32; HIDDEN2];
+    let mut h2 = [T::default(); HIDDEN2];
     for k in 0..HIDDEN2 {
         let mut s = p[B2 + k];
         for j in 0..HIDDEN1 {
@@ -112,6 +129,12 @@ pub fn forward(p: &[f32], x: &[f32; INPUTS]) -> [f32; OUTPUTS] {
         }
         h2[k] = s.tanh();
     }
+    (h1, h2)
+}
+
+/// The network on normalised inputs.
+pub fn forward(p: &[f32], x: &[f32; INPUTS]) -> [f32; OUTPUTS] {
+    let (_, h2) = hidden_layers(p, x);
     let mut y = [0.0f32; OUTPUTS];
     for c in 0..OUTPUTS {
         let mut s = p[B3 + c];
