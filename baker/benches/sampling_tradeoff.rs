@@ -58,16 +58,12 @@ fn main() {
                 initial_parameters(3, [0.0; 3]),
                 &LmSettings { max_iterations: 40, patience: 10 },
             );
-            let target = |s: &Sample| match component {
-                Component::Direct => s.direct,
-                Component::Indirect => s.indirect,
-            };
             let test = Dataset {
                 inputs: clean
                     .iter()
                     .map(|s| std::array::from_fn(|i| normalize(s.inputs[i], data.input_min[i], data.input_max[i])))
                     .collect(),
-                targets: clean.iter().map(|s| target(s).map(|v| v / data.output_scale)).collect(),
+                targets: clean.iter().map(|s| s.target(component).map(|v| v / data.output_scale)).collect(),
             };
             errors.push(test.mse(&result.params) * f64::from(data.output_scale).powi(2));
         }

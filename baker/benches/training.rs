@@ -73,9 +73,7 @@ fn adam(train: &Dataset, val: &Dataset, initial: &[f32], lr: f32, seconds: f64) 
     let mut step = 0i32;
     let mut next_report = 0.5;
     'epochs: loop {
-        for i in (1..order.len()).rev() {
-            order.swap(i, rng.next_u32() as usize % (i + 1));
-        }
+        rng.shuffle(&mut order);
         for batch in order.chunks(BATCH) {
             grad.fill(0.0);
             for &i in batch {

@@ -64,10 +64,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     }
     let scene = Scene::load(&args.scene)?;
     let model = Model::load(&args.model.clone().unwrap_or_else(|| default_model_path(&scene)), Some(&scene))?;
-    let view = match &args.view {
-        Some(name) => scene.view(name).cloned().with_context(|| format!("--view {name:?}: no such view"))?,
-        None => scene.views.first().cloned().context("the scene has no camera")?,
-    };
+    let view = super::view_args::named_view(&scene, args.view.as_deref())?;
     let light = scene.moving_light.as_ref().map(|l| l.default_position).unwrap_or_default();
     // Timing runs without the validation layer unless RRF_VALIDATION asks for it.
     let mut options = ContextOptions::from_env();

@@ -53,6 +53,19 @@ impl Component {
     }
 }
 
+/// The scene's view called `name`, or its default view (the glTF camera) for `None`.
+pub fn named_view(scene: &Scene, name: Option<&str>) -> Result<View> {
+    let Some(name) = name else {
+        return scene.views.first().cloned().with_context(|| {
+            format!("{}: the scene has no camera and no named views; use --camera", scene.gltf_path.display())
+        });
+    };
+    scene.view(name).cloned().with_context(|| {
+        let names = scene.views.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ");
+        format!("--view {name:?}: no such view in {} (views: {names})", scene.name)
+    })
+}
+
 /// `WxH`, each between 1 and 16384.
 pub fn parse_size(text: &str) -> Result<(u32, u32)> {
     let parse = || -> Option<(u32, u32)> {
@@ -87,28 +100,18 @@ impl ViewArgs {
 
     /// The view to render: `--view`, `--camera`, or the scene's default.
     pub fn resolve_view(&self, scene: &Scene) -> Result<View> {
-        let names = || scene.views.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ");
-        let default = match scene.views.first() {
-            Some(v) => v.clone(),
-            None => bail!("{}: the scene has no camera and no named views; use --camera", scene.gltf_path.display()),
+        let (Some(text), None) = (&self.camera, &self.view) else {
+            return named_view(scene, self.view.as_deref());
         };
-        if let Some(name) = &self.view {
-            return scene
-                .view(name)
-                .cloned()
-                .with_context(|| format!("--view {name:?}: no such view in {} (views: {})", scene.name, names()));
+        // A free camera keeps the default view's field of view.
+        let default = named_view(scene, None)?;
+        let (eye, target) = text.split_once(':').with_context(|| format!("--camera {text:?}: expected EYE:TARGET"))?;
+        let eye = parse_vec3(eye, "--camera eye")?;
+        let target = parse_vec3(target, "--camera target")?;
+        if eye.distance(target) < 1e-6 {
+            bail!("--camera {text:?}: eye and target are the same point");
         }
-        if let Some(text) = &self.camera {
-            let (eye, target) =
-                text.split_once(':').with_context(|| format!("--camera {text:?}: expected EYE:TARGET"))?;
-            let eye = parse_vec3(eye, "--camera eye")?;
-            let target = parse_vec3(target, "--camera target")?;
-            if eye.distance(target) < 1e-6 {
-                bail!("--camera {text:?}: eye and target are the same point");
-            }
-            return Ok(View { name: "camera".into(), eye, target, up: Vec3::Y, fov_y: default.fov_y });
-        }
-        Ok(default)
+        Ok(View { name: "camera".into(), eye, target, up: Vec3::Y, fov_y: default.fov_y })
     }
 
     /// The moving light's position: `--light`, or `None` for the glTF's.

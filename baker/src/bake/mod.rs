@@ -368,16 +368,10 @@ pub fn network_data(
     samples: &[&Sample],
 ) -> NetworkData {
     let mut order: Vec<usize> = (0..samples.len()).collect();
-    let mut rng = Rng::new(settings.seed, 0x5eed_0000 + u64::from(object));
-    for i in (1..order.len()).rev() {
-        order.swap(i, rng.next_u32() as usize % (i + 1));
-    }
+    Rng::new(settings.seed, 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
     order.truncate(settings.max_samples_per_network);
     let (input_min, input_max) = input_ranges(scene, object);
-    let target = |s: &Sample| match component {
-        Component::Direct => s.direct,
-        Component::Indirect => s.indirect,
-    };
+    let target = |s: &Sample| s.target(component);
     let rms = {
         let sum: f64 = order.iter().flat_map(|&i| target(samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
         ((sum / (order.len() * OUTPUTS) as f64).sqrt() as f32).max(1e-6)

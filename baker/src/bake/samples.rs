@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use crate::network::{raw_inputs, INPUTS};
+use crate::network::{raw_inputs, Component, INPUTS};
 use crate::scene::{Aabb, Scene};
 use crate::trace::integrator::radiance_leaving;
 use crate::trace::sampling::{mix64, uniform_sphere, Rng};
@@ -25,6 +25,16 @@ pub struct Sample {
     pub indirect: [f32; 3],
 }
 
+impl Sample {
+    /// The radiance the `component` network learns from this sample.
+    pub fn target(&self, component: Component) -> [f32; 3] {
+        match component {
+            Component::Direct => self.direct,
+            Component::Indirect => self.indirect,
+        }
+    }
+}
+
 /// `n` configurations stratified in each of the six dimensions (light x, y, z and viewpoint
 /// x, y, z): a Latin hypercube, with the strata of each dimension shuffled independently.
 pub fn latin_hypercube(n: usize, light: &Aabb, camera: &Aabb, seed: u64) -> Vec<Configuration> {
@@ -32,10 +42,7 @@ pub fn latin_hypercube(n: usize, light: &Aabb, camera: &Aabb, seed: u64) -> Vec<
     let mut columns: Vec<Vec<f32>> = Vec::with_capacity(6);
     for _ in 0..6 {
         let mut strata: Vec<usize> = (0..n).collect();
-        for i in (1..n).rev() {
-            let j = (rng.next_u32() as usize) % (i + 1);
-            strata.swap(i, j);
-        }
+        rng.shuffle(&mut strata);
         columns.push(strata.iter().map(|&s| (s as f32 + rng.next_f32()) / n as f32).collect());
     }
     (0..n)

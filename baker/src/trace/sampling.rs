@@ -37,6 +37,13 @@ impl Rng {
     pub fn next_vec2(&mut self) -> Vec2 {
         Vec2::new(self.next_f32(), self.next_f32())
     }
+
+    /// Fisher–Yates shuffle.
+    pub fn shuffle<T>(&mut self, items: &mut [T]) {
+        for i in (1..items.len()).rev() {
+            items.swap(i, self.next_u32() as usize % (i + 1));
+        }
+    }
 }
 
 /// SplitMix64's finaliser: decorrelates nearby seeds and stream ids.
