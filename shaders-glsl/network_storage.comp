@@ -39,12 +39,8 @@ void main() {
         uint base = (id - 1u) * OBJECT_STRIDE;
         uint ranges = base + 2 * PARAMETERS;
         if (weights[ranges + 2 * INPUTS + 2] > 0.5) {
-            vec4 position_roughness = imageLoad(gbuffer_position, pixel);
-            vec3 p = position_roughness.xyz;
-            vec3 n = imageLoad(gbuffer_normal, pixel).xyz;
-            vec3 v = normalize(constants.eye.xyz - p);
-            float raw[INPUTS] = float[INPUTS](p.x, p.y, p.z, v.x, v.y, v.z, constants.light.x, constants.light.y,
-                                              constants.light.z, n.x, n.y, n.z, position_roughness.w);
+            float raw[INPUTS] = raw_inputs(imageLoad(gbuffer_position, pixel), imageLoad(gbuffer_normal, pixel).xyz,
+                                           constants.eye.xyz, constants.light.xyz);
             float x[INPUTS];
             for (int i = 0; i < INPUTS; ++i) {
                 x[i] = normalize_input(raw[i], weights[ranges + i], weights[ranges + INPUTS + i]);

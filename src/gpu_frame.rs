@@ -6,16 +6,16 @@ use rrf_baker::model::Model;
 use rrf_baker::network::Component;
 use rrf_baker::scene::{Scene, View};
 use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets};
-use rrf_renderer::network_pass::{pack_weights, NetworkConstants, NetworkPass, ObjectNetworks};
+use rrf_renderer::network_pass::{NetworkConstants, NetworkPass, NetworkShaders, ObjectNetworks, Variant};
 use rrf_renderer::tonemap::TonemapPass;
 use rrf_renderer::{vk, Context, Image};
 
 use crate::gpu_scene::{camera_constants, gbuffer_vertices};
 use crate::shaders;
 
-/// Per-object network slots for the network pass, by object id.
-pub fn network_weights(scene: &Scene, model: &Model) -> Result<Vec<f32>> {
-    let objects: Vec<Option<ObjectNetworks>> = scene
+/// Each object's networks, by object id; `None` for objects the model has none for.
+pub fn object_networks<'a>(scene: &Scene, model: &'a Model) -> Vec<Option<ObjectNetworks<'a>>> {
+    scene
         .objects
         .iter()
         .map(|o| {
@@ -30,8 +30,7 @@ pub fn network_weights(scene: &Scene, model: &Model) -> Result<Vec<f32>> {
                 indirect_scale: indirect.output_scale,
             })
         })
-        .collect();
-    Ok(pack_weights(&objects)?)
+        .collect()
 }
 
 /// Images of one frame, read back: RGBA per pixel, rows top to bottom.
@@ -56,13 +55,25 @@ pub struct GpuFrame {
 pub const TIMESTAMPS: u32 = 4;
 
 impl GpuFrame {
-    /// Everything for frames of `scene` at `extent`, with the moving light `light_offset` from
-    /// where the glTF puts it.
-    pub fn new(ctx: &Context, scene: &Scene, model: &Model, extent: vk::Extent2D, light_offset: Vec3) -> Result<Self> {
+    /// Everything for frames of `scene` at `extent` with network pass `variant`, with the
+    /// moving light `light_offset` from where the glTF puts it.
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        model: &Model,
+        variant: Variant,
+        extent: vk::Extent2D,
+        light_offset: Vec3,
+    ) -> Result<Self> {
         let targets = GBufferTargets::new(ctx, extent)?;
         let mesh = GBufferMesh::new(ctx, &gbuffer_vertices(scene, light_offset))?;
         let gbuffer = GBufferPass::new(ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG)?;
-        let network = NetworkPass::new(ctx, shaders::NETWORK_STORAGE_COMP, &targets, &network_weights(scene, model)?)?;
+        let network_shaders = NetworkShaders {
+            storage: shaders::NETWORK_STORAGE_COMP,
+            classify: shaders::NETWORK_CLASSIFY_COMP,
+            specialized: shaders::NETWORK_SPECIALIZED_COMP,
+        };
+        let network = NetworkPass::new(ctx, variant, &network_shaders, &targets, &object_networks(scene, model))?;
         let ldr = ctx.create_image(
             "ldr",
             extent,
@@ -109,7 +120,7 @@ impl GpuFrame {
             (vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags::COLOR_ATTACHMENT_WRITE),
             (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
         );
-        self.network.record(ctx, cmd, extent, &constants);
+        self.network.record(ctx, cmd, &constants);
         stamp(2, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
         ctx.memory_barrier(
             cmd,

@@ -1,5 +1,5 @@
 //! The GPU network pass against the CPU reference inference (`rrf render --cpu`), every
-//! component, pixel by pixel, with the shipped models.
+//! variant and every component, pixel by pixel, with the shipped models.
 
 mod common;
 
@@ -12,6 +12,7 @@ use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
 use rrf_baker::scene::Scene;
 use rrf_baker::trace::{Camera, Geometry, Radiance, World};
+use rrf_renderer::network_pass::Variant;
 use rrf_renderer::vk;
 
 /// One component of the CPU's radiance.
@@ -25,35 +26,50 @@ fn compare(scene_name: &str, view_name: &str, light: Vec3, width: u32, height: u
     let offset = light - scene.moving_light.as_ref().unwrap().default_position;
 
     let ctx = gpu();
-    let frame = GpuFrame::new(&ctx, &scene, &model, vk::Extent2D { width, height }, offset).unwrap();
-    let pixels = frame.render(&ctx, &view, light).unwrap();
-    frame.destroy(&ctx);
+    let extent = vk::Extent2D { width, height };
+    let rendered: Vec<_> = Variant::ALL
+        .iter()
+        .map(|&variant| {
+            let frame = GpuFrame::new(&ctx, &scene, &model, variant, extent, offset).unwrap();
+            let pixels = frame.render(&ctx, &view, light).unwrap();
+            frame.destroy(&ctx);
+            (variant, pixels)
+        })
+        .collect();
     finish_clean(ctx);
 
     let geometry = Geometry::new(&scene);
     let world = World::new(&scene, &geometry, Some(light));
     let cpu = predict_image(&world, &Camera::new(&view, width as f32 / height as f32), &model, width, height);
 
-    let components: [(&str, &Vec<f32>, Pick); 3] = [
-        ("direct", &pixels.direct, |r| r.direct),
-        ("indirect", &pixels.indirect, |r| r.indirect),
-        ("gi", &pixels.gi, |r| r.gi()),
-    ];
-    for (name, gpu_pixels, pick) in components {
-        let mut within = 0;
-        let mut worst = 0.0f32;
-        for (i, r) in cpu.pixels.iter().enumerate() {
-            let c = pick(r);
-            let g = Vec3::new(gpu_pixels[4 * i], gpu_pixels[4 * i + 1], gpu_pixels[4 * i + 2]);
-            // Relative error per pixel, with an absolute floor far below what a display shows.
-            let error = ((g - c).abs() / (c.abs() + Vec3::splat(1e-3))).max_element();
-            worst = worst.max(error);
-            within += usize::from(error <= 1e-3);
+    for (variant, pixels) in &rendered {
+        let variant = variant.name();
+        let components: [(&str, &Vec<f32>, Pick); 3] = [
+            ("direct", &pixels.direct, |r| r.direct),
+            ("indirect", &pixels.indirect, |r| r.indirect),
+            ("gi", &pixels.gi, |r| r.gi()),
+        ];
+        for (name, gpu_pixels, pick) in components {
+            check(&format!("{scene_name} {variant} {name}"), &cpu.pixels, gpu_pixels, pick);
         }
-        let n = cpu.pixels.len();
-        eprintln!("{scene_name} {name}: {within}/{n} pixels within 1e-3 relative, worst {worst:.2e}");
-        assert!(within as f64 >= 0.999 * n as f64, "{scene_name} {name}: only {within} of {n} pixels within 1e-3");
     }
+}
+
+/// At least 99.9% of the pixels within 1e-3 relative error.
+fn check(what: &str, cpu: &[Radiance], gpu: &[f32], pick: Pick) {
+    let mut within = 0;
+    let mut worst = 0.0f32;
+    for (i, r) in cpu.iter().enumerate() {
+        let c = pick(r);
+        let g = Vec3::new(gpu[4 * i], gpu[4 * i + 1], gpu[4 * i + 2]);
+        // Relative error per pixel, with an absolute floor far below what a display shows.
+        let error = ((g - c).abs() / (c.abs() + Vec3::splat(1e-3))).max_element();
+        worst = worst.max(error);
+        within += usize::from(error <= 1e-3);
+    }
+    let n = cpu.len();
+    eprintln!("{what}: {within}/{n} pixels within 1e-3 relative, worst {worst:.2e}");
+    assert!(within as f64 >= 0.999 * n as f64, "{what}: only {within} of {n} pixels within 1e-3");
 }
 
 #[test]

@@ -1,7 +1,9 @@
-//! A compute pipeline with one descriptor set whose resources are bound once, at creation.
+//! Compute pipelines of one shader with one descriptor set whose resources are bound once, at
+//! creation.
 //!
 //! Every pass in rrf works on images of a fixed size, so its resources are known when it is
-//! built; binding them then keeps per-frame recording free of descriptor updates.
+//! built; binding them then keeps per-frame recording free of descriptor updates. A pass can
+//! hold several pipelines of the same shader that differ only in specialization constants.
 
 use ash::vk;
 
@@ -27,8 +29,20 @@ impl Bind<'_> {
     }
 }
 
+/// Specialization constant values: word `i` is the 32-bit value of `constant_id = i`.
+pub type Specialization = Vec<u32>;
+
+/// How many workgroups a dispatch launches.
+pub enum Dispatch<'a> {
+    /// Enough to cover `width × height` invocations, rounded up to whole workgroups; the shader
+    /// skips invocations outside the image.
+    Covering { width: u32, height: u32 },
+    /// A `VkDispatchIndirectCommand` at `offset` in `buffer`, written on the device.
+    Indirect { buffer: &'a Buffer, offset: u64 },
+}
+
 pub struct ComputePass {
-    pub pipeline: vk::Pipeline,
+    pipelines: Vec<vk::Pipeline>,
     pub layout: vk::PipelineLayout,
     set_layout: vk::DescriptorSetLayout,
     pool: vk::DescriptorPool,
@@ -48,6 +62,21 @@ impl ComputePass {
         bindings: &[Bind<'_>],
         push_bytes: u32,
         workgroup: (u32, u32),
+    ) -> Result<Self> {
+        Self::specialized(ctx, name, spirv, bindings, push_bytes, workgroup, &[Vec::new()])
+    }
+
+    /// Like [`ComputePass::new`], with one pipeline per entry of `specializations`, created on
+    /// all CPU cores: drivers compile each one separately, and one that folds constants into
+    /// the code can take a while.
+    pub fn specialized(
+        ctx: &Context,
+        name: &str,
+        spirv: &[u32],
+        bindings: &[Bind<'_>],
+        push_bytes: u32,
+        workgroup: (u32, u32),
+        specializations: &[Specialization],
     ) -> Result<Self> {
         let device = &ctx.device;
         let layout_bindings: Vec<_> = bindings
@@ -84,14 +113,9 @@ impl ComputePass {
             let module = device
                 .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None)
                 .vk("vkCreateShaderModule")?;
-            let stage = vk::PipelineShaderStageCreateInfo::default()
-                .stage(vk::ShaderStageFlags::COMPUTE)
-                .module(module)
-                .name(c"main");
-            let info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
-            let pipeline = device.create_compute_pipelines(vk::PipelineCache::null(), &[info], None);
+            let pipelines = create_pipelines(device, module, layout, specializations);
             device.destroy_shader_module(module, None);
-            let pipeline = pipeline.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0];
+            let pipelines = pipelines?;
 
             let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
             for b in bindings {
@@ -121,27 +145,46 @@ impl ComputePass {
             };
             write_set(device, set, bindings);
 
-            ctx.set_name(pipeline, name);
+            for (i, &pipeline) in pipelines.iter().enumerate() {
+                let label = if pipelines.len() > 1 { format!("{name} #{i}") } else { name.to_string() };
+                ctx.set_name(pipeline, &label);
+            }
             ctx.set_name(layout, name);
             ctx.set_name(set_layout, name);
-            Ok(Self { pipeline, layout, set_layout, pool, set, workgroup })
+            Ok(Self { pipelines, layout, set_layout, pool, set, workgroup })
         }
     }
 
-    /// Records a dispatch that covers `width × height` invocations, rounded up to whole
-    /// workgroups; the shader skips invocations outside the image.
+    /// Records a dispatch of the first pipeline that covers `width × height` invocations.
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, push: &[u8], width: u32, height: u32) {
+        self.record_pipeline(ctx, cmd, 0, push, Dispatch::Covering { width, height });
+    }
+
+    /// Records a dispatch of pipeline `index` (the order of `specializations`).
+    pub fn record_pipeline(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        index: usize,
+        push: &[u8],
+        dispatch: Dispatch,
+    ) {
         let device = &ctx.device;
         // SAFETY: `cmd` is recording; the pipeline, layout and set belong to this device.
         unsafe {
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipelines[index]);
             if self.set != vk::DescriptorSet::null() {
                 device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[self.set], &[]);
             }
             if !push.is_empty() {
                 device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
             }
-            device.cmd_dispatch(cmd, width.div_ceil(self.workgroup.0), height.div_ceil(self.workgroup.1), 1);
+            match dispatch {
+                Dispatch::Covering { width, height } => {
+                    device.cmd_dispatch(cmd, width.div_ceil(self.workgroup.0), height.div_ceil(self.workgroup.1), 1);
+                }
+                Dispatch::Indirect { buffer, offset } => device.cmd_dispatch_indirect(cmd, buffer.raw, offset),
+            }
         }
     }
 
@@ -149,10 +192,70 @@ impl ComputePass {
         let device = &ctx.device;
         // SAFETY: the caller has finished all GPU work that uses the pass.
         unsafe {
-            device.destroy_pipeline(self.pipeline, None);
+            for pipeline in self.pipelines {
+                device.destroy_pipeline(pipeline, None);
+            }
             device.destroy_pipeline_layout(self.layout, None);
             device.destroy_descriptor_pool(self.pool, None);
             device.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+/// One pipeline per specialization, spread over the CPU's cores. On failure, destroys the
+/// pipelines it made.
+///
+/// # Safety
+/// `module` and `layout` belong to `device`.
+unsafe fn create_pipelines(
+    device: &ash::Device,
+    module: vk::ShaderModule,
+    layout: vk::PipelineLayout,
+    specializations: &[Specialization],
+) -> Result<Vec<vk::Pipeline>> {
+    let create = |spec: &Specialization| -> Result<vk::Pipeline> {
+        let entries: Vec<_> = (0..spec.len() as u32)
+            .map(|id| vk::SpecializationMapEntry { constant_id: id, offset: 4 * id, size: 4 })
+            .collect();
+        let info = vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(spec));
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(c"main");
+        if !spec.is_empty() {
+            stage = stage.specialization_info(&info);
+        }
+        let create_info = vk::ComputePipelineCreateInfo::default().stage(stage).layout(layout);
+        // SAFETY: the create info and everything it points to live until the call returns;
+        // pipeline creation may run on several threads at once without a pipeline cache.
+        let created = unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &[create_info], None) };
+        Ok(created.map_err(|(_, e)| e).vk("vkCreateComputePipelines")?[0])
+    };
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(specializations.len()).max(1);
+    let chunk = specializations.len().div_ceil(threads).max(1);
+    let results: Vec<Result<vk::Pipeline>> = std::thread::scope(|scope| {
+        let workers: Vec<_> = specializations
+            .chunks(chunk)
+            .map(|specs| scope.spawn(move || specs.iter().map(create).collect::<Vec<_>>()))
+            .collect();
+        workers.into_iter().flat_map(|w| w.join().expect("pipeline creation thread panicked")).collect()
+    });
+    let mut pipelines = Vec::with_capacity(results.len());
+    let mut error = None;
+    for result in results {
+        match result {
+            Ok(pipeline) => pipelines.push(pipeline),
+            Err(e) => error = error.or(Some(e)),
+        }
+    }
+    match error {
+        None => Ok(pipelines),
+        Some(e) => {
+            for pipeline in pipelines {
+                // SAFETY: the pipelines were never used.
+                unsafe { device.destroy_pipeline(pipeline, None) };
+            }
+            Err(e)
         }
     }
 }

@@ -1,23 +1,76 @@
-//! The network compute pass, weights in a storage buffer: per pixel, the object's direct and
-//! indirect networks on inputs built from the G-buffer (`shaders-glsl/network_storage.comp`).
+//! The network pass: per pixel, the object's direct and indirect networks on inputs built from
+//! the G-buffer. The variants differ in how the weights reach the shader, the pass's main
+//! performance question (BENCHMARKS.md has the figures):
+//!
+//! - [`Variant::Storage`]: one dispatch; every object's weights in a storage buffer, indexed
+//!   by the pixel's object id (`network_storage.comp`).
+//! - [`Variant::PerObject`]: one pipeline per object with its weights as specialization
+//!   constants (`network_specialized.comp`), each dispatched over the whole image, skipping
+//!   other objects' pixels.
+//! - [`Variant::Tiled`]: the same pipelines, each dispatched indirectly over only the 8×8
+//!   tiles that its object covers, as `network_classify.comp` sorted them.
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
+use gpu_allocator::MemoryLocation;
 
-use crate::compute::{Bind, ComputePass};
+use crate::compute::{Bind, ComputePass, Dispatch, Specialization};
 use crate::context::Context;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBufferTargets;
 use crate::resources::{Buffer, Image};
 
 pub const INPUTS: usize = 13;
+const HIDDEN1: usize = 20;
+const HIDDEN2: usize = 10;
+const OUTPUTS: usize = 3;
+/// Offsets of the parameter layout (the baker's `network.rs`): w1 [20][13], b1, w2 [10][20],
+/// b2, w3 [3][10], b3.
+const B1: usize = HIDDEN1 * INPUTS;
+const W2: usize = B1 + HIDDEN1;
+const W3: usize = W2 + HIDDEN2 * HIDDEN1 + HIDDEN2;
+const B3: usize = W3 + OUTPUTS * HIDDEN2;
 /// Parameters of one 13 → 20 → 10 → 3 network.
-pub const PARAMETERS: usize = 20 * 13 + 20 + 10 * 20 + 10 + 3 * 10 + 3;
-/// Floats per object slot: direct and indirect parameters, input ranges, two output scales,
-/// and a presence flag.
+pub const PARAMETERS: usize = B3 + OUTPUTS;
+/// Floats per object slot of the storage variant: direct and indirect parameters, input
+/// ranges, two output scales, and a presence flag.
 pub const OBJECT_STRIDE: usize = 2 * PARAMETERS + 2 * INPUTS + 3;
+/// Specialization constant id of the first direct parameter in `network_specialized.comp`
+/// (build.rs generates the declarations from the same value).
+const FIRST_PARAMETER_ID: usize = 16;
+/// The most objects `network_classify.comp` tells apart.
+const MAX_OBJECTS: usize = 1024;
+/// Pixels per side of the tiles the classify pass sorts; the workgroup size of both shaders.
+const TILE: u32 = 8;
 
-/// One object's two networks, as the shader reads them.
+/// How the networks reach the shader.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    Storage,
+    PerObject,
+    Tiled,
+}
+
+impl Variant {
+    pub const ALL: [Variant; 3] = [Variant::Tiled, Variant::PerObject, Variant::Storage];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Storage => "storage",
+            Variant::PerObject => "per-object",
+            Variant::Tiled => "tiled",
+        }
+    }
+}
+
+/// SPIR-V of the network shaders.
+pub struct NetworkShaders<'a> {
+    pub storage: &'a [u32],
+    pub classify: &'a [u32],
+    pub specialized: &'a [u32],
+}
+
+/// One object's two networks, as the baker trained them.
 pub struct ObjectNetworks<'a> {
     pub direct: &'a [f32],
     pub indirect: &'a [f32],
@@ -27,15 +80,22 @@ pub struct ObjectNetworks<'a> {
     pub indirect_scale: f32,
 }
 
-/// Packs per-object networks by object id; `None` for objects without networks (they get
-/// zero direct and indirect light).
+impl ObjectNetworks<'_> {
+    fn check(&self, id: usize) -> Result<()> {
+        if self.direct.len() != PARAMETERS || self.indirect.len() != PARAMETERS {
+            return Err(Error::Invalid(format!("object {id}: a network must have {PARAMETERS} parameters")));
+        }
+        Ok(())
+    }
+}
+
+/// Packs per-object networks by object id for the storage variant; `None` for objects
+/// without networks (they get zero direct and indirect light).
 pub fn pack_weights(objects: &[Option<ObjectNetworks>]) -> Result<Vec<f32>> {
     let mut out = vec![0.0f32; objects.len().max(1) * OBJECT_STRIDE];
     for (id, object) in objects.iter().enumerate() {
         let Some(n) = object else { continue };
-        if n.direct.len() != PARAMETERS || n.indirect.len() != PARAMETERS {
-            return Err(Error::Invalid(format!("object {id}: a network must have {PARAMETERS} parameters")));
-        }
+        n.check(id)?;
         let slot = &mut out[id * OBJECT_STRIDE..(id + 1) * OBJECT_STRIDE];
         slot[..PARAMETERS].copy_from_slice(n.direct);
         slot[PARAMETERS..2 * PARAMETERS].copy_from_slice(n.indirect);
@@ -49,11 +109,71 @@ pub fn pack_weights(objects: &[Option<ObjectNetworks>]) -> Result<Vec<f32>> {
     Ok(out)
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+/// A network that takes raw inputs: the input normalisation (the baker's `normalize`, an
+/// affine map per input) folded into the first layer and the output scale into the last.
+/// Computed in f64, so the result differs from the unfolded network only by f32 rounding.
+fn fold(params: &[f32], input_min: &[f32; INPUTS], input_max: &[f32; INPUTS], output_scale: f32) -> Vec<f32> {
+    let mut out = params.to_vec();
+    for j in 0..HIDDEN1 {
+        let mut bias = f64::from(params[B1 + j]);
+        for i in 0..INPUTS {
+            let (lo, hi) = (f64::from(input_min[i]), f64::from(input_max[i]));
+            let range = hi - lo;
+            // normalize(x) = a x + b, or 0 for a constant input (range ≤ 1e-6, as in the baker).
+            let (a, b) = if range > 1e-6 { (2.0 / range, -2.0 * lo / range - 1.0) } else { (0.0, 0.0) };
+            let w = f64::from(params[j * INPUTS + i]);
+            out[j * INPUTS + i] = (w * a) as f32;
+            bias += w * b;
+        }
+        out[B1 + j] = bias as f32;
+    }
+    for p in &mut out[W3..] {
+        *p = (f64::from(*p) * f64::from(output_scale)) as f32;
+    }
+    out
+}
+
+/// Specialization constants of object `id`'s pipeline (see `network_specialized.comp`).
+fn specialization(id: usize, n: &ObjectNetworks, tiled: bool) -> Specialization {
+    let mut words = vec![0u32; FIRST_PARAMETER_ID + 2 * PARAMETERS];
+    words[0] = id as u32 + 1;
+    words[1] = u32::from(tiled);
+    let direct = fold(n.direct, &n.input_min, &n.input_max, n.direct_scale);
+    let indirect = fold(n.indirect, &n.input_min, &n.input_max, n.indirect_scale);
+    for (word, value) in words[FIRST_PARAMETER_ID..].iter_mut().zip(direct.iter().chain(&indirect)) {
+        *word = value.to_bits();
+    }
+    words
+}
+
+/// Camera and light, as every variant's shader reads them.
+#[derive(Clone, Copy, Debug)]
 pub struct NetworkConstants {
     pub eye: [f32; 4],
     pub light: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct StoragePush {
+    eye: [f32; 4],
+    light: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SpecializedPush {
+    eye: [f32; 4],
+    light: [f32; 4],
+    tile_capacity: u32,
+    pad: [u32; 3],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct ClassifyPush {
+    objects: u32,
+    tile_capacity: u32,
 }
 
 /// HDR outputs of the network pass, in `GENERAL` layout.
@@ -65,26 +185,44 @@ pub struct NetworkOutputs {
 }
 
 pub struct NetworkPass {
-    pass: ComputePass,
-    weights: Buffer,
+    variant: Variant,
+    extent: vk::Extent2D,
     pub outputs: NetworkOutputs,
+    kind: Kind,
+}
+
+enum Kind {
+    Storage { pass: ComputePass, weights: Buffer },
+    Specialized(Specialized),
+}
+
+struct Specialized {
+    classify: ComputePass,
+    /// One pipeline per object with networks, in the order of `objects`.
+    networks: ComputePass,
+    /// Object id of each pipeline.
+    objects: Vec<usize>,
+    object_count: u32,
+    tile_capacity: u32,
+    /// 1 per object with networks, 0 otherwise.
+    trained: Buffer,
+    /// A `VkDispatchIndirectCommand` per object id.
+    dispatch: Buffer,
+    /// What `dispatch` is reset to before each frame: no tiles, y = z = 1.
+    dispatch_reset: Vec<u32>,
+    tiles: Buffer,
 }
 
 impl NetworkPass {
-    /// `spirv` is `network_storage.comp`; `weights` comes from [`pack_weights`].
-    pub fn new(ctx: &Context, spirv: &[u32], gbuffer: &GBufferTargets, weights: &[f32]) -> Result<Self> {
-        let max = u64::from(ctx.info.limits.max_storage_buffer_range);
-        if (weights.len() * 4) as u64 > max {
-            return Err(Error::Invalid(format!(
-                "{} bytes of weights exceed maxStorageBufferRange {max}",
-                weights.len() * 4
-            )));
-        }
-        let weights = ctx.create_buffer_with_data(
-            "network weights",
-            bytemuck::cast_slice(weights),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+    /// The pass for `objects` (by object id; `None` for objects without networks), which
+    /// reads `gbuffer`.
+    pub fn new(
+        ctx: &Context,
+        variant: Variant,
+        shaders: &NetworkShaders,
+        gbuffer: &GBufferTargets,
+        objects: &[Option<ObjectNetworks>],
+    ) -> Result<Self> {
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let format = vk::Format::R32G32B32A32_SFLOAT;
         let outputs = NetworkOutputs {
@@ -97,36 +235,266 @@ impl NetworkPass {
                 ctx.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
             }
         })?;
-        let bindings = [
-            Bind::StorageImage(&gbuffer.position),
-            Bind::StorageImage(&gbuffer.normal),
+        let kind = match variant {
+            Variant::Storage => storage(ctx, shaders.storage, gbuffer, &outputs, objects),
+            Variant::PerObject | Variant::Tiled => {
+                specialized(ctx, shaders, gbuffer, &outputs, objects, variant == Variant::Tiled).map(Kind::Specialized)
+            }
+        };
+        match kind {
+            Ok(kind) => Ok(NetworkPass { variant, extent: gbuffer.extent, outputs, kind }),
+            Err(e) => {
+                for image in [outputs.direct, outputs.indirect, outputs.gi] {
+                    ctx.destroy_image(image);
+                }
+                Err(e)
+            }
+        }
+    }
+
+    pub fn variant(&self) -> Variant {
+        self.variant
+    }
+
+    /// Records the pass; the G-buffer must be written and visible to compute shaders.
+    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, constants: &NetworkConstants) {
+        let extent = self.extent;
+        match &self.kind {
+            Kind::Storage { pass, .. } => {
+                let push = StoragePush { eye: constants.eye, light: constants.light };
+                pass.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height);
+            }
+            Kind::Specialized(s) => s.record(ctx, cmd, extent, self.variant == Variant::Tiled, constants),
+        }
+    }
+
+    pub fn destroy(self, ctx: &Context) {
+        match self.kind {
+            Kind::Storage { pass, weights } => {
+                pass.destroy(ctx);
+                ctx.destroy_buffer(weights);
+            }
+            Kind::Specialized(s) => {
+                s.classify.destroy(ctx);
+                s.networks.destroy(ctx);
+                for buffer in [s.trained, s.dispatch, s.tiles] {
+                    ctx.destroy_buffer(buffer);
+                }
+            }
+        }
+        for image in [self.outputs.direct, self.outputs.indirect, self.outputs.gi] {
+            ctx.destroy_image(image);
+        }
+    }
+}
+
+fn storage(
+    ctx: &Context,
+    spirv: &[u32],
+    gbuffer: &GBufferTargets,
+    outputs: &NetworkOutputs,
+    objects: &[Option<ObjectNetworks>],
+) -> Result<Kind> {
+    let weights = pack_weights(objects)?;
+    let max = u64::from(ctx.info.limits.max_storage_buffer_range);
+    if (weights.len() * 4) as u64 > max {
+        return Err(Error::Invalid(format!(
+            "{} bytes of weights exceed maxStorageBufferRange {max}",
+            weights.len() * 4
+        )));
+    }
+    let weights = ctx.create_buffer_with_data(
+        "network weights",
+        bytemuck::cast_slice(&weights),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+    )?;
+    let bindings = [
+        Bind::StorageImage(&gbuffer.position),
+        Bind::StorageImage(&gbuffer.normal),
+        Bind::StorageImage(&gbuffer.object),
+        Bind::StorageImage(&gbuffer.emission),
+        Bind::StorageBuffer(&weights),
+        Bind::StorageImage(&outputs.direct),
+        Bind::StorageImage(&outputs.indirect),
+        Bind::StorageImage(&outputs.gi),
+    ];
+    let push = std::mem::size_of::<StoragePush>() as u32;
+    match ComputePass::new(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE)) {
+        Ok(pass) => Ok(Kind::Storage { pass, weights }),
+        Err(e) => {
+            ctx.destroy_buffer(weights);
+            Err(e)
+        }
+    }
+}
+
+fn specialized(
+    ctx: &Context,
+    shaders: &NetworkShaders,
+    gbuffer: &GBufferTargets,
+    outputs: &NetworkOutputs,
+    objects: &[Option<ObjectNetworks>],
+    tiled: bool,
+) -> Result<Specialized> {
+    if objects.len() > MAX_OBJECTS {
+        return Err(Error::Invalid(format!(
+            "{} objects; the specialized network variants handle at most {MAX_OBJECTS} (use --variant storage)",
+            objects.len()
+        )));
+    }
+    let extent = gbuffer.extent;
+    let tile_capacity = extent.width.div_ceil(TILE) * extent.height.div_ceil(TILE);
+    let tiles_bytes = objects.len().max(1) as u64 * u64::from(tile_capacity) * 4;
+    let max = u64::from(ctx.info.limits.max_storage_buffer_range);
+    if tiles_bytes > max {
+        return Err(Error::Invalid(format!(
+            "tile lists of {} objects at {}x{} need {tiles_bytes} bytes, over maxStorageBufferRange {max}; \
+             render smaller or use --variant storage",
+            objects.len(),
+            extent.width,
+            extent.height
+        )));
+    }
+    let mut specializations = Vec::new();
+    let mut trained_ids = Vec::new();
+    for (id, object) in objects.iter().enumerate() {
+        if let Some(n) = object {
+            n.check(id)?;
+            specializations.push(specialization(id, n, tiled));
+            trained_ids.push(id);
+        }
+    }
+    let trained: Vec<u32> = objects.iter().map(|o| u32::from(o.is_some())).collect();
+    let dispatch_reset: Vec<u32> = objects.iter().flat_map(|_| [0, 1, 1]).collect();
+
+    let mut buffers = Vec::new();
+    let made = (|| -> Result<(ComputePass, ComputePass)> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        buffers.push(ctx.create_buffer_with_data("network trained objects", pad(&trained), storage)?);
+        buffers.push(ctx.create_buffer(
+            "network dispatch",
+            pad(&dispatch_reset).len() as u64,
+            storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?);
+        buffers.push(ctx.create_buffer("network tiles", tiles_bytes, storage, MemoryLocation::GpuOnly)?);
+        let classify_bindings = [
             Bind::StorageImage(&gbuffer.object),
             Bind::StorageImage(&gbuffer.emission),
-            Bind::StorageBuffer(&weights),
+            Bind::StorageBuffer(&buffers[0]),
+            Bind::StorageBuffer(&buffers[1]),
+            Bind::StorageBuffer(&buffers[2]),
             Bind::StorageImage(&outputs.direct),
             Bind::StorageImage(&outputs.indirect),
             Bind::StorageImage(&outputs.gi),
         ];
-        let pass = ComputePass::new(
+        let push = std::mem::size_of::<ClassifyPush>() as u32;
+        let classify = ComputePass::new(
             ctx,
-            "network (storage buffer)",
-            spirv,
-            &bindings,
-            std::mem::size_of::<NetworkConstants>() as u32,
-            (8, 8),
+            "network tile classification",
+            shaders.classify,
+            &classify_bindings,
+            push,
+            (TILE, TILE),
         )?;
-        Ok(NetworkPass { pass, weights, outputs })
+        let network_bindings = [
+            Bind::StorageImage(&gbuffer.position),
+            Bind::StorageImage(&gbuffer.normal),
+            Bind::StorageImage(&gbuffer.object),
+            Bind::StorageImage(&gbuffer.emission),
+            Bind::StorageBuffer(&buffers[2]),
+            Bind::StorageImage(&outputs.direct),
+            Bind::StorageImage(&outputs.indirect),
+            Bind::StorageImage(&outputs.gi),
+        ];
+        let push = std::mem::size_of::<SpecializedPush>() as u32;
+        let name = "network (specialization constants)";
+        let networks = ComputePass::specialized(
+            ctx,
+            name,
+            shaders.specialized,
+            &network_bindings,
+            push,
+            (TILE, TILE),
+            &specializations,
+        );
+        match networks {
+            Ok(networks) => Ok((classify, networks)),
+            Err(e) => {
+                classify.destroy(ctx);
+                Err(e)
+            }
+        }
+    })();
+    match made {
+        Ok((classify, networks)) => {
+            let tiles = buffers.pop().expect("three buffers");
+            let dispatch = buffers.pop().expect("three buffers");
+            let trained = buffers.pop().expect("three buffers");
+            Ok(Specialized {
+                classify,
+                networks,
+                objects: trained_ids,
+                object_count: objects.len() as u32,
+                tile_capacity,
+                trained,
+                dispatch,
+                dispatch_reset,
+                tiles,
+            })
+        }
+        Err(e) => {
+            for buffer in buffers {
+                ctx.destroy_buffer(buffer);
+            }
+            Err(e)
+        }
     }
+}
 
-    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, constants: &NetworkConstants) {
-        self.pass.record(ctx, cmd, bytemuck::bytes_of(constants), extent.width, extent.height);
-    }
+/// `words` as bytes, with at least one word: Vulkan buffers cannot be empty.
+fn pad(words: &[u32]) -> &[u8] {
+    const ZERO: &[u32] = &[0];
+    bytemuck::cast_slice(if words.is_empty() { ZERO } else { words })
+}
 
-    pub fn destroy(self, ctx: &Context) {
-        self.pass.destroy(ctx);
-        ctx.destroy_buffer(self.weights);
-        for image in [self.outputs.direct, self.outputs.indirect, self.outputs.gi] {
-            ctx.destroy_image(image);
+impl Specialized {
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, tiled: bool, c: &NetworkConstants) {
+        let compute = vk::PipelineStageFlags::COMPUTE_SHADER;
+        let indirect = vk::PipelineStageFlags::DRAW_INDIRECT;
+        // The previous frame's classification and dispatches are done with the counters.
+        ctx.memory_barrier(
+            cmd,
+            (compute | indirect, vk::AccessFlags::empty()),
+            (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+        );
+        if !self.dispatch_reset.is_empty() {
+            // SAFETY: recording outside a render pass; at most 12 KiB (MAX_OBJECTS), under
+            // vkCmdUpdateBuffer's 64 KiB.
+            unsafe {
+                ctx.device.cmd_update_buffer(cmd, self.dispatch.raw, 0, bytemuck::cast_slice(&self.dispatch_reset))
+            };
+        }
+        ctx.memory_barrier(
+            cmd,
+            (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
+            (compute, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
+        );
+        let push = ClassifyPush { objects: self.object_count, tile_capacity: self.tile_capacity };
+        self.classify.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height);
+        ctx.memory_barrier(
+            cmd,
+            (compute, vk::AccessFlags::SHADER_WRITE),
+            (compute | indirect, vk::AccessFlags::SHADER_READ | vk::AccessFlags::INDIRECT_COMMAND_READ),
+        );
+        let push = SpecializedPush { eye: c.eye, light: c.light, tile_capacity: self.tile_capacity, pad: [0; 3] };
+        for (index, &id) in self.objects.iter().enumerate() {
+            let dispatch = if tiled {
+                Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * id as u64 }
+            } else {
+                Dispatch::Covering { width: extent.width, height: extent.height }
+            };
+            self.networks.record_pipeline(ctx, cmd, index, bytemuck::bytes_of(&push), dispatch);
         }
     }
 }

@@ -5,9 +5,8 @@
 #ifndef RRF_NETWORK_GLSL
 #define RRF_NETWORK_GLSL
 
-#define INPUTS 13
-#define HIDDEN1 20
-#define HIDDEN2 10
+#include "network_inputs.glsl"
+
 #define W1 0
 #define B1 (W1 + HIDDEN1 * INPUTS)
 #define W2 (B1 + HIDDEN1)
@@ -30,7 +29,7 @@ vec3 forward(uint base, float x[INPUTS]) {
         for (int i = 0; i < INPUTS; ++i) {
             s += weights[base + W1 + j * INPUTS + i] * x[i];
         }
-        h1[j] = tanh(s);
+        h1[j] = network_tanh(s);
     }
     float h2[HIDDEN2];
     for (int k = 0; k < HIDDEN2; ++k) {
@@ -38,7 +37,7 @@ vec3 forward(uint base, float x[INPUTS]) {
         for (int j = 0; j < HIDDEN1; ++j) {
             s += weights[base + W2 + k * HIDDEN1 + j] * h1[j];
         }
-        h2[k] = tanh(s);
+        h2[k] = network_tanh(s);
     }
     vec3 y;
     for (int c = 0; c < 3; ++c) {

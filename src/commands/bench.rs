@@ -5,24 +5,32 @@ use std::time::Instant;
 
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, ValueEnum};
+use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::network::Component;
-use rrf_baker::scene::Scene;
+use rrf_baker::scene::{Scene, View};
 use rrf_renderer::{vk, Context, ContextOptions, Validation};
 use serde_json::json;
 
 use super::bake::default_model_path;
+use super::variant::VariantArg;
 use crate::gpu_frame::{GpuFrame, TIMESTAMPS};
 
 /// Multiply-adds of one 13 → 20 → 10 → 3 network: 13·20 + 20·10 + 10·3.
 const MULTIPLY_ADDS: f64 = 490.0;
 
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Variant {
-    /// Weights in a storage buffer, indexed by object id (network_storage.comp).
-    Storage,
-    /// Every variant, one after the other.
-    All,
+/// `--variant`: one variant, or all of them.
+#[derive(Clone, Debug)]
+pub struct Variants(pub Vec<VariantArg>);
+
+fn parse_variants(s: &str) -> Result<Variants, String> {
+    if s == "all" {
+        return Ok(Variants(VariantArg::value_variants().to_vec()));
+    }
+    VariantArg::from_str(s, false).map(|v| Variants(vec![v])).map_err(|_| {
+        let names: Vec<_> = VariantArg::value_variants().iter().map(|v| v.0.name()).collect();
+        format!("expected one of {} or all", names.join(", "))
+    })
 }
 
 #[derive(Args, Debug)]
@@ -41,9 +49,10 @@ pub struct BenchArgs {
     /// Frames to time (after two warm-up frames).
     #[arg(long, default_value_t = 30)]
     pub frames: u32,
-    /// How the networks reach the shader.
-    #[arg(long, value_enum, default_value_t = Variant::All)]
-    pub variant: Variant,
+    /// Network pass variant to time: tiled, per-object, storage (see `rrf render --help`), or
+    /// all of them one after the other.
+    #[arg(long, default_value = "all", value_parser = parse_variants, value_name = "V|all")]
+    pub variant: Variants,
     /// The device's fp32 peak in GFLOP/s, to report the fraction the network pass reaches.
     #[arg(long)]
     pub peak_gflops: Option<f64>,
@@ -65,7 +74,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
     let model = Model::load(&args.model.clone().unwrap_or_else(|| default_model_path(&scene)), Some(&scene))?;
     let view = super::view_args::named_view(&scene, args.view.as_deref())?;
-    let light = scene.moving_light.as_ref().map(|l| l.default_position).unwrap_or_default();
     // Timing runs without the validation layer unless RRF_VALIDATION asks for it.
     let mut options = ContextOptions::from_env();
     if std::env::var_os("RRF_VALIDATION").is_none() {
@@ -75,52 +83,92 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let Some(period_ns) = ctx.info.limits.timestamp_period_ns else {
         bail!("{} cannot write timestamps on its queue", ctx.info.name);
     };
-    let frame = GpuFrame::new(&ctx, &scene, &model, vk::Extent2D { width, height }, rrf_baker::glam::Vec3::ZERO)?;
     let pool_info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(TIMESTAMPS);
     // SAFETY: a plain query pool, destroyed below.
     let pool = unsafe { ctx.device.create_query_pool(&pool_info, None) }.context("vkCreateQueryPool")?;
+    let bench = Bench { ctx: &ctx, pool, period_ns: f64::from(period_ns), scene: &scene, model: &model, args };
+    let rows: Result<Vec<_>> = args
+        .variant
+        .0
+        .iter()
+        .map(|&variant| {
+            let row = bench.variant(variant, &view, width, height)?;
+            print_row(&row, args.json);
+            Ok(row)
+        })
+        .collect();
+    // SAFETY: no work is pending.
+    unsafe { ctx.device.destroy_query_pool(pool, None) };
+    let report = ctx.finish();
+    rows?;
+    if !report.is_clean() {
+        bail!("Vulkan reported {} validation messages; leaked {:?}", report.validation_messages, report.leaked);
+    }
+    Ok(())
+}
 
-    let result = (|| -> Result<Vec<serde_json::Value>> {
-        let (mut gbuffer, mut network, mut tonemap, mut cpu) = (vec![], vec![], vec![], vec![]);
-        for i in 0..args.frames + 2 {
-            let start = Instant::now();
-            ctx.submit_once(|cmd| frame.record(&ctx, cmd, &view, light, 1.0, Some(pool)))?;
-            let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
-            let mut stamps = [0u64; TIMESTAMPS as usize];
-            // SAFETY: the frame has finished; the pool holds TIMESTAMPS 64-bit results.
-            unsafe {
-                ctx.device.get_query_pool_results(
-                    pool,
-                    0,
-                    &mut stamps,
-                    vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-                )
+struct Bench<'a> {
+    ctx: &'a Context,
+    pool: vk::QueryPool,
+    period_ns: f64,
+    scene: &'a Scene,
+    model: &'a Model,
+    args: &'a BenchArgs,
+}
+
+impl Bench<'_> {
+    /// Times one variant; returns its row.
+    fn variant(&self, variant: VariantArg, view: &View, width: u32, height: u32) -> Result<serde_json::Value> {
+        let (ctx, scene, model, args) = (self.ctx, self.scene, self.model, self.args);
+        let light = scene.moving_light.as_ref().map(|l| l.default_position).unwrap_or_default();
+        let setup = Instant::now();
+        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, Vec3::ZERO)?;
+        let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
+        let timed = (|| -> Result<_> {
+            let (mut gbuffer, mut network, mut tonemap, mut cpu) = (vec![], vec![], vec![], vec![]);
+            for i in 0..args.frames + 2 {
+                let start = Instant::now();
+                ctx.submit_once(|cmd| frame.record(ctx, cmd, view, light, 1.0, Some(self.pool)))?;
+                let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
+                let mut stamps = [0u64; TIMESTAMPS as usize];
+                // SAFETY: the frame has finished; the pool holds TIMESTAMPS 64-bit results.
+                unsafe {
+                    ctx.device.get_query_pool_results(
+                        self.pool,
+                        0,
+                        &mut stamps,
+                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+                    )
+                }
+                .context("vkGetQueryPoolResults")?;
+                if i < 2 {
+                    continue; // warm-up
+                }
+                let ms = |a: usize, b: usize| (stamps[b].wrapping_sub(stamps[a])) as f64 * self.period_ns * 1e-6;
+                gbuffer.push(ms(0, 1));
+                network.push(ms(1, 2));
+                tonemap.push(ms(2, 3));
+                cpu.push(cpu_ms);
             }
-            .context("vkGetQueryPoolResults")?;
-            if i < 2 {
-                continue; // warm-up
-            }
-            let ms = |a: usize, b: usize| (stamps[b].wrapping_sub(stamps[a])) as f64 * f64::from(period_ns) * 1e-6;
-            gbuffer.push(ms(0, 1));
-            network.push(ms(1, 2));
-            tonemap.push(ms(2, 3));
-            cpu.push(cpu_ms);
-        }
+            Ok((gbuffer, network, tonemap, cpu, frame.read_objects(ctx)?))
+        })();
+        frame.destroy(ctx);
+        let (gbuffer, network, tonemap, cpu, objects) = timed?;
         // Networks evaluated per frame: two per pixel of an object that has them.
-        let objects = frame.read_objects(&ctx)?;
         let trained: Vec<bool> =
             scene.objects.iter().map(|o| model.network(&o.name, Component::Direct).is_some()).collect();
         let evaluations = 2 * objects.iter().filter(|&&id| id > 0 && trained[id as usize - 1]).count();
         let network_ms = median(network);
         let per_s = evaluations as f64 / (network_ms * 1e-3);
         let gflops = per_s * 2.0 * MULTIPLY_ADDS * 1e-9;
-        Ok(vec![json!({
+        Ok(json!({
             "device": ctx.info.name,
-            "variant": "storage",
+            "variant": variant.0.name(),
             "scene": scene.name,
             "width": width,
             "height": height,
             "frames": args.frames,
+            "setup_ms": setup_ms,
             "gbuffer_ms": median(gbuffer),
             "network_ms": network_ms,
             "tonemap_ms": median(tonemap),
@@ -129,36 +177,34 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "network_pixels_per_s": per_s,
             "network_gflops": gflops,
             "peak_fraction": args.peak_gflops.map(|p| gflops / p),
-        })])
-    })();
-    // SAFETY: no work is pending.
-    unsafe { ctx.device.destroy_query_pool(pool, None) };
-    frame.destroy(&ctx);
-    let report = ctx.finish();
-    let rows = result?;
-    if !report.is_clean() {
-        bail!("Vulkan reported {} validation messages; leaked {:?}", report.validation_messages, report.leaked);
+        }))
     }
-    for row in rows {
-        if args.json {
-            println!("{row}");
-        } else {
-            println!(
-                "{} {} on {}, {}x{}, median of {} frames:\n  G-buffer {:.2} ms, network {:.2} ms, tonemap {:.2} ms; frame (CPU, submit to finish) {:.2} ms\n  {:.1} M network-pixels/s ({:.1} GFLOP/s)",
-                row["scene"].as_str().unwrap_or_default(),
-                row["variant"].as_str().unwrap_or_default(),
-                row["device"].as_str().unwrap_or_default(),
-                width,
-                height,
-                args.frames,
-                row["gbuffer_ms"].as_f64().unwrap_or_default(),
-                row["network_ms"].as_f64().unwrap_or_default(),
-                row["tonemap_ms"].as_f64().unwrap_or_default(),
-                row["frame_ms"].as_f64().unwrap_or_default(),
-                row["network_pixels_per_s"].as_f64().unwrap_or_default() / 1e6,
-                row["network_gflops"].as_f64().unwrap_or_default(),
-            );
-        }
+}
+
+fn print_row(row: &serde_json::Value, json: bool) {
+    if json {
+        println!("{row}");
+        return;
     }
-    Ok(())
+    let f = |key: &str| row[key].as_f64().unwrap_or_default();
+    let s = |key: &str| row[key].as_str().unwrap_or_default().to_string();
+    println!(
+        "{} {} on {}, {}x{}, median of {} frames (pipelines built in {:.0} ms):\n  \
+         G-buffer {:.2} ms, network {:.2} ms, tonemap {:.2} ms; frame (CPU, submit to finish) {:.2} ms\n  \
+         {:.1} M network-pixels/s ({:.1} GFLOP/s{})",
+        s("scene"),
+        s("variant"),
+        s("device"),
+        row["width"],
+        row["height"],
+        row["frames"],
+        f("setup_ms"),
+        f("gbuffer_ms"),
+        f("network_ms"),
+        f("tonemap_ms"),
+        f("frame_ms"),
+        f("network_pixels_per_s") / 1e6,
+        f("network_gflops"),
+        row["peak_fraction"].as_f64().map(|p| format!(", {:.1}% of peak", 100.0 * p)).unwrap_or_default(),
+    );
 }

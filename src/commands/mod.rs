@@ -5,4 +5,5 @@ pub mod bench;
 pub mod info;
 pub mod reference;
 pub mod render;
+pub mod variant;
 pub mod view_args;

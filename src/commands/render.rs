@@ -13,6 +13,7 @@ use rrf_baker::trace::{Camera, Geometry, World};
 use rrf_renderer::{vk, Context, ContextOptions};
 
 use super::bake::default_model_path;
+use super::variant::VariantArg;
 use super::view_args::{Component, ViewArgs};
 use crate::gpu_frame::GpuFrame;
 use crate::image_out::write_image;
@@ -27,6 +28,9 @@ pub struct RenderArgs {
     /// Which light to show.
     #[arg(long, value_enum, default_value_t = Component::Gi)]
     pub component: Component,
+    /// How the networks reach the shader (GPU only).
+    #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
+    pub variant: VariantArg,
     /// Evaluate the networks on the CPU with the baker's reference inference (primary hits
     /// by ray casting) instead of on the Vulkan device (G-buffer pass, then network pass).
     #[arg(long)]
@@ -54,7 +58,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         let image = predict_image(&world, &camera, &model, width, height);
         (image.component(|r| args.component.pick(r)), "CPU inference".to_string())
     } else {
-        gpu_render(&scene, &model, &view, light, width, height, args.component)?
+        gpu_render(&scene, &model, args.variant, &view, light, (width, height), args.component)?
     };
     let seconds = start.elapsed().as_secs_f64();
     write_image(&args.output, width, height, &pixels, args.view.exposure)?;
@@ -66,19 +70,20 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 fn gpu_render(
     scene: &Scene,
     model: &Model,
+    variant: VariantArg,
     view: &View,
     light: Option<Vec3>,
-    width: u32,
-    height: u32,
+    (width, height): (u32, u32),
     component: Component,
 ) -> Result<(Vec<Vec3>, String)> {
     let ctx = Context::new(&ContextOptions::from_env())?;
     let default_light = scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position);
     let light = light.unwrap_or(default_light);
-    let frame = GpuFrame::new(&ctx, scene, model, vk::Extent2D { width, height }, light - default_light)?;
+    let extent = vk::Extent2D { width, height };
+    let frame = GpuFrame::new(&ctx, scene, model, variant.0, extent, light - default_light)?;
     let rendered = frame.render(&ctx, view, light);
     frame.destroy(&ctx);
-    let device = ctx.info.name.clone();
+    let device = format!("{}, {} network pass", ctx.info.name, variant.0.name());
     let report = ctx.finish();
     if !report.is_clean() {
         bail!(
