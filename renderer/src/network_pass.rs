@@ -193,7 +193,7 @@ pub struct NetworkPass {
 
 enum Kind {
     Storage { pass: ComputePass, weights: Buffer },
-    Specialized(Specialized),
+    Specialized(Box<Specialized>),
 }
 
 struct Specialized {
@@ -238,7 +238,8 @@ impl NetworkPass {
         let kind = match variant {
             Variant::Storage => storage(ctx, shaders.storage, gbuffer, &outputs, objects),
             Variant::PerObject | Variant::Tiled => {
-                specialized(ctx, shaders, gbuffer, &outputs, objects, variant == Variant::Tiled).map(Kind::Specialized)
+                specialized(ctx, shaders, gbuffer, &outputs, objects, variant == Variant::Tiled)
+                    .map(|s| Kind::Specialized(Box::new(s)))
             }
         };
         match kind {
@@ -275,6 +276,7 @@ impl NetworkPass {
                 ctx.destroy_buffer(weights);
             }
             Kind::Specialized(s) => {
+                let s = *s;
                 s.classify.destroy(ctx);
                 s.networks.destroy(ctx);
                 for buffer in [s.trained, s.dispatch, s.tiles] {
