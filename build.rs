@@ -173,10 +173,11 @@ fn specialized_networks_glsl() -> String {
                 declare(&mut s, format!("{prefix}_B{layer}_{row}"));
             }
         }
+        // fma() lets the driver emit fused multiply-adds, which it may not do for a * b + c.
         let dot = |layer: &str, row: usize, inputs: &[String]| {
             let mut sum = format!("{prefix}_B{layer}_{row}");
             for (column, input) in inputs.iter().enumerate() {
-                let _ = write!(sum, " + {prefix}_W{layer}_{row}_{column} * {input}");
+                sum = format!("fma({prefix}_W{layer}_{row}_{column}, {input}, {sum})");
             }
             sum
         };
