@@ -13,10 +13,11 @@ fn bench_prints_the_figures() {
     );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8(out.stdout).unwrap();
+    let mut variants = Vec::new();
     for line in stdout.lines() {
         let row: serde_json::Value = serde_json::from_str(line).unwrap();
         assert!(row["device"].as_str().unwrap().contains("llvmpipe"));
-        assert_eq!(row["variant"], "storage");
+        variants.push(row["variant"].as_str().unwrap().to_string());
         assert_eq!(
             (row["width"].as_u64(), row["height"].as_u64(), row["frames"].as_u64()),
             (Some(32), Some(32), Some(2))
@@ -29,5 +30,13 @@ fn bench_prints_the_figures() {
         let evaluations = row["networks_per_frame"].as_u64().unwrap();
         assert!(evaluations > 1000 && evaluations <= 2 * 32 * 32, "{evaluations}");
     }
-    assert_eq!(stdout.lines().count(), 1, "one variant so far");
+    assert_eq!(variants, ["tiled", "per-object", "storage"], "--variant all by default");
+}
+
+#[test]
+fn bench_rejects_an_unknown_variant() {
+    let out = rrf(&["bench", "scenes/cornell-box", "--variant", "fastest"], &[]);
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("tiled, per-object, storage or all"), "{stderr}");
 }
