@@ -19,10 +19,7 @@ pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Vec3], exposu
             .with_context(|| format!("cannot write {}", path.display()))?;
         }
         Some("png") => {
-            let scale = exposure.exp2();
-            let bytes: Vec<u8> =
-                pixels.iter().flat_map(|p| tonemap(p.to_array(), scale).map(|c| (c * 255.0 + 0.5) as u8)).collect();
-            image::RgbImage::from_raw(width, height, bytes)
+            image::RgbImage::from_raw(width, height, tonemap_rgb8(pixels, exposure))
                 .context("image size does not match its pixels")?
                 .save(path)
                 .with_context(|| format!("cannot write {}", path.display()))?;
@@ -30,4 +27,11 @@ pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Vec3], exposu
         _ => bail!("{}: the output must end in .exr (linear HDR) or .png (tonemapped)", path.display()),
     }
     Ok(())
+}
+
+/// Linear radiance to display sRGB, 8 bits per channel, RGB rows: what a PNG of the pixels
+/// shows (exposure in stops, ACES, sRGB; the tonemap pass's CPU twin).
+pub fn tonemap_rgb8(pixels: &[Vec3], exposure: f32) -> Vec<u8> {
+    let scale = exposure.exp2();
+    pixels.iter().flat_map(|p| tonemap(p.to_array(), scale).map(|c| (c * 255.0 + 0.5) as u8)).collect()
 }

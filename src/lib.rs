@@ -5,6 +5,7 @@
 //! (Vulkan). This crate owns the compiled shaders and hands them to the renderer.
 
 pub mod commands;
+pub mod eval;
 pub mod gpu_frame;
 pub mod gpu_scene;
 pub mod image_out;

@@ -48,6 +48,13 @@ enum Command {
     /// frames, and report network evaluations per second. Runs without the validation layer
     /// unless RRF_VALIDATION is set.
     Bench(rrf::commands::bench::BenchArgs),
+    /// Measure the networks against the path tracer on configurations they never saw:
+    /// relMSE, PSNR and FLIP per component (global, direct, indirect), and one figure per
+    /// configuration (predicted direct | indirect | global | reference | FLIP error).
+    ///
+    /// Writes DIR/metrics.json, DIR/index.html and the figures. References are cached under
+    /// the scene's .cache/ folder, so a second eval only renders what changed.
+    Eval(rrf::commands::eval::EvalArgs),
 }
 
 fn main() -> ExitCode {
@@ -58,6 +65,7 @@ fn main() -> ExitCode {
         Command::Bake(args) => rrf::commands::bake::run(&args),
         Command::Render(args) => rrf::commands::render::run(&args),
         Command::Bench(args) => rrf::commands::bench::run(&args),
+        Command::Eval(args) => rrf::commands::eval::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

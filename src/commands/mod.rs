@@ -2,6 +2,7 @@
 
 pub mod bake;
 pub mod bench;
+pub mod eval;
 pub mod info;
 pub mod reference;
 pub mod render;

@@ -1,0 +1,241 @@
+//! `rrf eval`: the networks against the path tracer on held-out configurations, in numbers
+//! (`metrics.json`) and pictures (one figure per configuration, `index.html`).
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context as _, Result};
+use clap::Args;
+use rrf_baker::glam::Vec3;
+use rrf_baker::model::Model;
+use rrf_baker::predict::predict_image;
+use rrf_baker::scene::Scene;
+use rrf_baker::trace::render::RenderSettings;
+use rrf_baker::trace::{Camera, Geometry, TraceSettings, World};
+use rrf_renderer::network_pass::Variant;
+use rrf_renderer::{vk, Context, ContextOptions};
+
+use super::bake::default_model_path;
+use crate::eval::configs::{held_out, EvalConfig};
+use crate::eval::figure::{compose, Panel};
+use crate::eval::metrics::compare;
+use crate::eval::reference_cache::{default_cache_dir, reference};
+use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, ConfigReport, Report};
+use crate::gpu_frame::GpuFrame;
+use crate::image_out::tonemap_rgb8;
+use crate::progress::Progress;
+
+const MAX_DEPTH: u32 = 8;
+const RR_DEPTH: u32 = 5;
+
+#[derive(Args, Debug)]
+pub struct EvalArgs {
+    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    pub scene: PathBuf,
+    /// Model file; default: model.safetensors in the scene's folder.
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// Random configurations (Latin hypercube over the light and camera boxes), on top of one
+    /// per named view of the sidecar.
+    #[arg(long, default_value_t = 6)]
+    pub configs: usize,
+    /// Samples per pixel of the path-traced references (cached under the scene's .cache/).
+    #[arg(long, default_value_t = 256)]
+    pub spp: u32,
+    /// Image size in pixels.
+    #[arg(long, default_value = "256x256", value_name = "WxH")]
+    pub size: String,
+    /// Seed of the held-out configurations and of the references' paths. Eval's configurations
+    /// come from a stream that baking never uses, whatever the two seeds.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Predict with the CPU reference inference instead of the Vulkan renderer (the fallback
+    /// when no Vulkan device is available).
+    #[arg(long)]
+    pub cpu: bool,
+    /// Where to cache the references; default: .cache/references/ in the scene's folder.
+    #[arg(long, value_name = "DIR")]
+    pub cache: Option<PathBuf>,
+    /// Output folder: metrics.json, index.html and one PNG per configuration.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Makes the predictions: the Vulkan renderer, or the CPU inference.
+enum Predictor {
+    Gpu(Context),
+    Cpu,
+}
+
+pub fn run(args: &EvalArgs) -> Result<()> {
+    let (width, height) = super::view_args::parse_size(&args.size)?;
+    if args.spp == 0 {
+        bail!("--spp must be at least 1");
+    }
+    let scene = Scene::load(&args.scene)?;
+    let model_path = args.model.clone().unwrap_or_else(|| default_model_path(&scene));
+    let model = Model::load(&model_path, Some(&scene))?;
+    let geometry = Geometry::new(&scene);
+    let configs = held_out(&scene, &geometry, args.configs, args.seed)?;
+    std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create {}", args.output.display()))?;
+
+    let predictor = if args.cpu {
+        Predictor::Cpu
+    } else {
+        match Context::new(&ContextOptions::from_env()) {
+            Ok(ctx) => Predictor::Gpu(ctx),
+            Err(e) => {
+                eprintln!("warning: no Vulkan device ({e}); predicting with the CPU inference");
+                Predictor::Cpu
+            }
+        }
+    };
+    let predictions = match &predictor {
+        Predictor::Gpu(ctx) => format!("{} (Vulkan, {} network pass)", ctx.info.name, Variant::Tiled.name()),
+        Predictor::Cpu => "the CPU reference inference".to_string(),
+    };
+    let cache = args.cache.clone().unwrap_or_else(|| default_cache_dir(&scene));
+    let settings = RenderSettings {
+        width,
+        height,
+        spp: args.spp,
+        trace: TraceSettings { max_depth: MAX_DEPTH, rr_depth: Some(RR_DEPTH) },
+        seed: args.seed,
+    };
+    eprintln!(
+        "{} configurations of {} at {width}x{height}; references at {} spp, cached in {}",
+        configs.len(),
+        scene.name,
+        args.spp,
+        cache.display()
+    );
+
+    let evaluated: Result<Vec<ConfigReport>> = configs
+        .iter()
+        .enumerate()
+        .map(|(i, config)| {
+            let progress =
+                Progress::new(u64::from(width * height), &format!("reference {}/{}", i + 1, configs.len()), false);
+            let (truth, cached) = reference(&scene, &geometry, config, &settings, &cache, &|n| progress.inc(n))?;
+            progress.finish();
+            let predicted = predict(&predictor, &scene, &geometry, &model, config, width, height)?;
+            let figure = format!("{:02}-{}.png", i, config.name);
+            let metrics = evaluate(&predicted, &truth.pixels, width, height, args.spp, &args.output.join(&figure))?;
+            eprintln!(
+                "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4}{}",
+                config.name,
+                metrics.gi.relmse,
+                metrics.gi.psnr,
+                metrics.gi.flip,
+                if cached { " (cached reference)" } else { "" }
+            );
+            let v = &config.view;
+            Ok(ConfigReport {
+                name: config.name.clone(),
+                camera: CameraReport { eye: v.eye.to_array(), target: v.target.to_array(), fov_y: v.fov_y },
+                light: config.light.to_array(),
+                figure,
+                reference_cached: cached,
+                metrics,
+            })
+        })
+        .collect();
+    if let Predictor::Gpu(ctx) = predictor {
+        let report = ctx.finish();
+        if !report.is_clean() {
+            bail!("Vulkan reported {} validation messages; leaked {:?}", report.validation_messages, report.leaked);
+        }
+    }
+    let configs = evaluated?;
+    let all: Vec<ComponentMetrics> = configs.iter().map(|c| c.metrics).collect();
+    let mean = ComponentMetrics::mean(&all);
+    let report = Report {
+        scene: scene.name.clone(),
+        model: model_path.display().to_string(),
+        predictions,
+        width,
+        height,
+        spp: args.spp,
+        max_depth: MAX_DEPTH,
+        rr_depth: RR_DEPTH,
+        seed: args.seed,
+        configs,
+        mean,
+    };
+    report::write(&args.output, &report)?;
+    println!("{:<10} {:>10} {:>9} {:>8}", "component", "relMSE", "PSNR dB", "FLIP");
+    for (name, m) in [("gi", mean.gi), ("direct", mean.direct), ("indirect", mean.indirect)] {
+        println!("{name:<10} {:>10.4} {:>9.2} {:>8.4}", m.relmse, m.psnr, m.flip);
+    }
+    eprintln!("wrote {}", args.output.join("index.html").display());
+    Ok(())
+}
+
+/// Per-pixel predicted radiance of one configuration: direct, indirect, global.
+struct Predicted {
+    direct: Vec<Vec3>,
+    indirect: Vec<Vec3>,
+    gi: Vec<Vec3>,
+}
+
+fn predict(
+    predictor: &Predictor,
+    scene: &Scene,
+    geometry: &Geometry,
+    model: &Model,
+    config: &EvalConfig,
+    width: u32,
+    height: u32,
+) -> Result<Predicted> {
+    match predictor {
+        Predictor::Cpu => {
+            let world = World::new(scene, geometry, Some(config.light));
+            let camera = Camera::new(&config.view, width as f32 / height as f32);
+            let image = predict_image(&world, &camera, model, width, height);
+            Ok(Predicted {
+                direct: image.component(|r| r.direct),
+                indirect: image.component(|r| r.indirect),
+                gi: image.component(|r| r.gi()),
+            })
+        }
+        Predictor::Gpu(ctx) => {
+            let default_light = scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position);
+            let extent = vk::Extent2D { width, height };
+            let frame = GpuFrame::new(ctx, scene, model, Variant::Tiled, extent, config.light - default_light)?;
+            let pixels = frame.render(ctx, &config.view, config.light);
+            frame.destroy(ctx);
+            let pixels = pixels?;
+            let rgb = |rgba: &[f32]| rgba.chunks_exact(4).map(|p| Vec3::new(p[0], p[1], p[2])).collect();
+            Ok(Predicted { direct: rgb(&pixels.direct), indirect: rgb(&pixels.indirect), gi: rgb(&pixels.gi) })
+        }
+    }
+}
+
+/// Metrics per component, and the configuration's figure written to `figure`.
+fn evaluate(
+    p: &Predicted,
+    truth: &[rrf_baker::trace::Radiance],
+    width: u32,
+    height: u32,
+    spp: u32,
+    figure: &std::path::Path,
+) -> Result<ComponentMetrics> {
+    let pick = |f: fn(&rrf_baker::trace::Radiance) -> Vec3| truth.iter().map(f).collect::<Vec<Vec3>>();
+    let (true_direct, true_indirect, true_gi) = (pick(|r| r.direct), pick(|r| r.indirect), pick(|r| r.gi()));
+    let gi = compare(&p.gi, &true_gi, width, height);
+    let direct = compare(&p.direct, &true_direct, width, height);
+    let indirect = compare(&p.indirect, &true_indirect, width, height);
+    let metrics = ComponentMetrics { gi: gi.metrics, direct: direct.metrics, indirect: indirect.metrics };
+
+    let images = [&p.direct, &p.indirect, &p.gi, &true_gi].map(|pixels| tonemap_rgb8(pixels, 0.0));
+    let reference_label = format!("reference {spp}spp");
+    let labels = ["pred. direct", "pred. indirect", "pred. global", reference_label.as_str()];
+    let panels: Vec<Panel> = labels.iter().zip(&images).map(|(label, rgb)| Panel { label, rgb }).collect();
+    let footer: Vec<String> = [("global", metrics.gi), ("direct", metrics.direct), ("indirect", metrics.indirect)]
+        .iter()
+        .map(|(name, m)| format!("{name:<8} relMSE {:.4}  PSNR {:5.2} dB  FLIP {:.4}", m.relmse, m.psnr, m.flip))
+        .collect();
+    compose(&panels, &gi.flip_map, width, height, &footer)
+        .save(figure)
+        .with_context(|| format!("cannot write {}", figure.display()))?;
+    Ok(metrics)
+}

@@ -1,0 +1,96 @@
+//! Image metrics of a prediction against its reference: relMSE on linear radiance, and PSNR
+//! and FLIP on the tonemapped 8-bit images a person would look at.
+
+use rrf_baker::glam::Vec3;
+use serde::Serialize;
+
+use crate::image_out::tonemap_rgb8;
+
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Metrics {
+    /// mean((x − y)² / (y² + 0.01)) over pixels and channels, on linear radiance.
+    pub relmse: f64,
+    /// Of the tonemapped sRGB images, in dB; capped at 100 for identical images.
+    pub psnr: f64,
+    /// Mean FLIP error (NVIDIA's LDR-FLIP, 67 pixels per degree) of the tonemapped images.
+    pub flip: f64,
+}
+
+impl Metrics {
+    /// The mean of each metric over `all`.
+    pub fn mean<'a>(all: impl Iterator<Item = &'a Metrics>) -> Metrics {
+        let (mut sum, mut n) = (Metrics::default(), 0.0);
+        for m in all {
+            sum.relmse += m.relmse;
+            sum.psnr += m.psnr;
+            sum.flip += m.flip;
+            n += 1.0;
+        }
+        if n > 0.0 {
+            sum.relmse /= n;
+            sum.psnr /= n;
+            sum.flip /= n;
+        }
+        sum
+    }
+}
+
+/// A comparison: the metrics and FLIP's per-pixel error map (0 to 1, rows top to bottom).
+pub struct Comparison {
+    pub metrics: Metrics,
+    pub flip_map: Vec<f32>,
+}
+
+pub fn compare(predicted: &[Vec3], reference: &[Vec3], width: u32, height: u32) -> Comparison {
+    assert_eq!(predicted.len(), reference.len());
+    let relmse = predicted
+        .iter()
+        .zip(reference)
+        .flat_map(|(x, y)| (0..3).map(move |c| (f64::from(x[c]), f64::from(y[c]))))
+        .map(|(x, y)| (x - y).powi(2) / (y * y + 0.01))
+        .sum::<f64>()
+        / (3 * predicted.len().max(1)) as f64;
+
+    let (test, truth) = (tonemap_rgb8(predicted, 0.0), tonemap_rgb8(reference, 0.0));
+    let mse = test.iter().zip(&truth).map(|(&a, &b)| ((f64::from(a) - f64::from(b)) / 255.0).powi(2)).sum::<f64>()
+        / test.len().max(1) as f64;
+    let psnr = if mse > 0.0 { (10.0 * (1.0 / mse).log10()).min(100.0) } else { 100.0 };
+
+    let error = nv_flip::flip(
+        nv_flip::FlipImageRgb8::with_data(width, height, &truth),
+        nv_flip::FlipImageRgb8::with_data(width, height, &test),
+        nv_flip::DEFAULT_PIXELS_PER_DEGREE,
+    );
+    let flip = f64::from(nv_flip::FlipPool::from_image(&error).mean());
+    Comparison { metrics: Metrics { relmse, psnr, flip }, flip_map: error.to_vec() }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn identical_images_score_perfectly() {
+        let image: Vec<Vec3> = (0..64).map(|i| Vec3::splat(i as f32 / 64.0)).collect();
+        let m = compare(&image, &image, 8, 8).metrics;
+        assert_eq!((m.relmse, m.psnr, m.flip), (0.0, 100.0, 0.0));
+    }
+
+    #[test]
+    fn relmse_follows_its_definition() {
+        // x = 0.2 against y = 0.1 in every channel: 0.01 / (0.01 + 0.01) = 0.5.
+        let m = compare(&[Vec3::splat(0.2); 4], &[Vec3::splat(0.1); 4], 2, 2).metrics;
+        assert!((m.relmse - 0.5).abs() < 1e-6, "{}", m.relmse);
+        assert!(m.psnr < 100.0 && m.flip > 0.0 && m.flip <= 1.0, "{m:?}");
+    }
+
+    #[test]
+    fn a_worse_prediction_scores_worse() {
+        let truth: Vec<Vec3> =
+            (0..256).map(|i| Vec3::new((i % 16) as f32 / 16.0, 0.3, (i / 16) as f32 / 16.0)).collect();
+        let near: Vec<Vec3> = truth.iter().map(|v| *v * 1.02).collect();
+        let far: Vec<Vec3> = truth.iter().map(|v| *v * 1.5).collect();
+        let (a, b) = (compare(&near, &truth, 16, 16).metrics, compare(&far, &truth, 16, 16).metrics);
+        assert!(a.relmse < b.relmse && a.psnr > b.psnr && a.flip < b.flip, "{a:?} {b:?}");
+    }
+}

@@ -1,0 +1,7 @@
+//! `rrf eval`: how close the networks come to the path tracer on configurations they never saw.
+
+pub mod configs;
+pub mod figure;
+pub mod metrics;
+pub mod reference_cache;
+pub mod report;

@@ -1,0 +1,131 @@
+//! `DIR/metrics.json` and `DIR/index.html`: every configuration's figure with its numbers.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::{Context as _, Result};
+use serde::Serialize;
+
+use super::metrics::Metrics;
+
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ComponentMetrics {
+    pub gi: Metrics,
+    pub direct: Metrics,
+    pub indirect: Metrics,
+}
+
+impl ComponentMetrics {
+    pub fn mean(all: &[ComponentMetrics]) -> ComponentMetrics {
+        ComponentMetrics {
+            gi: Metrics::mean(all.iter().map(|m| &m.gi)),
+            direct: Metrics::mean(all.iter().map(|m| &m.direct)),
+            indirect: Metrics::mean(all.iter().map(|m| &m.indirect)),
+        }
+    }
+
+    fn by_name(&self) -> [(&'static str, &Metrics); 3] {
+        [("gi", &self.gi), ("direct", &self.direct), ("indirect", &self.indirect)]
+    }
+}
+
+#[derive(Debug, Serialize)]
+pub struct Camera {
+    pub eye: [f32; 3],
+    pub target: [f32; 3],
+    pub fov_y: f32,
+}
+
+#[derive(Debug, Serialize)]
+pub struct ConfigReport {
+    pub name: String,
+    pub camera: Camera,
+    pub light: [f32; 3],
+    /// The figure's file name in DIR.
+    pub figure: String,
+    pub reference_cached: bool,
+    pub metrics: ComponentMetrics,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Report {
+    pub scene: String,
+    pub model: String,
+    /// What made the predictions: the Vulkan device, or the CPU inference.
+    pub predictions: String,
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub rr_depth: u32,
+    pub seed: u64,
+    pub configs: Vec<ConfigReport>,
+    pub mean: ComponentMetrics,
+}
+
+pub fn write(dir: &Path, report: &Report) -> Result<()> {
+    let json = dir.join("metrics.json");
+    let text = serde_json::to_string_pretty(report).context("cannot serialise the metrics")?;
+    std::fs::write(&json, text + "\n").with_context(|| format!("cannot write {}", json.display()))?;
+    let html = dir.join("index.html");
+    std::fs::write(&html, page(report)).with_context(|| format!("cannot write {}", html.display()))?;
+    Ok(())
+}
+
+fn row(out: &mut String, label: &str, m: &ComponentMetrics) {
+    let _ = write!(out, "<tr><th>{label}</th>");
+    for (_, x) in m.by_name() {
+        let _ = write!(out, "<td>{:.4}</td><td>{:.2}</td><td>{:.4}</td>", x.relmse, x.psnr, x.flip);
+    }
+    out.push_str("</tr>\n");
+}
+
+fn page(r: &Report) -> String {
+    let mut s = String::new();
+    let _ = write!(
+        s,
+        "<!doctype html>\n<meta charset=\"utf-8\">\n<title>rrf eval: {scene}</title>\n\
+         <style>body{{font-family:sans-serif;background:#181818;color:#eee;margin:2em}}\
+         table{{border-collapse:collapse}}td,th{{padding:2px 8px;text-align:right}}\
+         img{{max-width:100%}}</style>\n\
+         <h1>rrf eval: {scene}</h1>\n<p>Model <code>{model}</code>, predictions from {pred}. References: \
+         the baker's path tracer, {spp} spp, max depth {depth}, at {w}×{h}. Configurations held out \
+         from training (seed {seed}).</p>\n",
+        scene = r.scene,
+        model = r.model,
+        pred = r.predictions,
+        spp = r.spp,
+        depth = r.max_depth,
+        w = r.width,
+        h = r.height,
+        seed = r.seed,
+    );
+    s.push_str(
+        "<table>\n<tr><th></th><th colspan=3>gi</th><th colspan=3>direct</th><th colspan=3>indirect</th></tr>\n\
+         <tr><th>configuration</th>",
+    );
+    for _ in 0..3 {
+        s.push_str("<th>relMSE</th><th>PSNR dB</th><th>FLIP</th>");
+    }
+    s.push_str("</tr>\n");
+    row(&mut s, "mean", &r.mean);
+    for c in &r.configs {
+        row(&mut s, &c.name, &c.metrics);
+    }
+    s.push_str("</table>\n");
+    for c in &r.configs {
+        let _ = write!(
+            s,
+            "<h2>{name}</h2>\n<p>eye {:?}, target {:?}, light {:?}; global relMSE {:.4}, FLIP {:.4}</p>\n\
+             <img src=\"{fig}\" alt=\"{name}\">\n",
+            c.camera.eye,
+            c.camera.target,
+            c.light,
+            c.metrics.gi.relmse,
+            c.metrics.gi.flip,
+            name = c.name,
+            fig = c.figure,
+        );
+    }
+    s
+}

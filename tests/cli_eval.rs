@@ -1,0 +1,107 @@
+//! `rrf eval` end to end on a `--quality test` model: held-out configurations, cached
+//! references, finite and sane metrics, figures and the index. Small sizes and few samples:
+//! this checks the pipeline, not the networks' quality (BENCHMARKS.md has that).
+
+mod common;
+
+use std::path::Path;
+
+use common::rrf;
+use rrf::eval::configs::held_out;
+use rrf_baker::bake::samples::latin_hypercube;
+use rrf_baker::scene::Scene;
+use rrf_baker::trace::Geometry;
+
+#[test]
+fn eval_reports_metrics_figures_and_caches_references() {
+    let dir = std::env::temp_dir().join(format!("rrf-cli-eval-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("model.safetensors");
+    let out = rrf(&["bake", "scenes/cornell-box", "--quality", "test", "-o", model.to_str().unwrap()], &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+
+    let (cache, report_dir) = (dir.join("cache"), dir.join("eval"));
+    let eval = || {
+        let args = [
+            "eval",
+            "scenes/cornell-box",
+            "--model",
+            model.to_str().unwrap(),
+            "--configs",
+            "1",
+            "--spp",
+            "8",
+            "--size",
+            "48x32",
+            "--cache",
+            cache.to_str().unwrap(),
+            "-o",
+            report_dir.to_str().unwrap(),
+        ];
+        let out = rrf(&args, &[("RRF_VALIDATION", "required")]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = std::fs::read_to_string(report_dir.join("metrics.json")).unwrap();
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()
+    };
+
+    let first = eval();
+    assert_eq!(first["scene"], "cornell-box");
+    let configs = first["configs"].as_array().unwrap();
+    // One per named view (default, corner, front) and one from the hypercube.
+    assert_eq!(configs.len(), 4, "{first}");
+    let html = std::fs::read_to_string(report_dir.join("index.html")).unwrap();
+    for c in configs {
+        assert_eq!(c["reference_cached"], false);
+        assert_eq!(c["camera"]["eye"].as_array().unwrap().len(), 3);
+        assert_eq!(c["light"].as_array().unwrap().len(), 3);
+        let figure = c["figure"].as_str().unwrap();
+        assert!(html.contains(figure), "index.html shows {figure}");
+        let png = image::open(report_dir.join(figure)).unwrap();
+        assert!(png.width() > 5 * 48 && png.height() > 32, "five panels and the labels");
+        sane(&c["metrics"]);
+    }
+    sane(&first["mean"]);
+
+    let second = eval();
+    for c in second["configs"].as_array().unwrap() {
+        assert_eq!(c["reference_cached"], true, "the second eval reads the cached references");
+    }
+    assert_eq!(first["mean"], second["mean"], "the same references and predictions give the same numbers");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Every component's metrics finite and in range; the global image of even a test-quality
+/// model is recognisably the scene.
+fn sane(metrics: &serde_json::Value) {
+    for component in ["gi", "direct", "indirect"] {
+        let m = &metrics[component];
+        let (relmse, psnr, flip) =
+            (m["relmse"].as_f64().unwrap(), m["psnr"].as_f64().unwrap(), m["flip"].as_f64().unwrap());
+        assert!(relmse.is_finite() && relmse >= 0.0, "{component}: {m}");
+        assert!(psnr.is_finite() && psnr > 5.0 && psnr <= 100.0, "{component}: {m}");
+        assert!((0.0..=1.0).contains(&flip), "{component}: {m}");
+    }
+    let gi = &metrics["gi"];
+    assert!(gi["relmse"].as_f64().unwrap() < 1.0 && gi["flip"].as_f64().unwrap() < 0.5, "{gi}");
+}
+
+#[test]
+fn held_out_cameras_look_into_the_scene_and_differ_from_training() {
+    let scene = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy-room")).unwrap();
+    let geometry = Geometry::new(&scene);
+    let configs = held_out(&scene, &geometry, 16, 0).unwrap();
+    assert_eq!(configs.len(), scene.views.len() + 16);
+    let bounds = scene.bounds();
+    let diagonal = (bounds.max - bounds.min).length();
+    let light_box = &scene.moving_light.as_ref().unwrap().bounds;
+    let camera_box = scene.camera_box.as_ref().unwrap();
+    let training = latin_hypercube(16, light_box, camera_box, 0);
+    for c in &configs[scene.views.len()..] {
+        assert!(camera_box.contains(c.view.eye) && light_box.contains(c.light), "{c:?}");
+        let dir = (c.view.target - c.view.eye).normalize();
+        let depth = geometry.intersect(c.view.eye, dir, f32::INFINITY, &[]).map_or(f32::INFINITY, |h| h.t);
+        assert!(depth >= 0.2 * diagonal, "{}: looks at a surface {depth} m away", c.name);
+        assert!(training.iter().all(|t| t.light != c.light && t.viewpoint != c.view.eye));
+    }
+}
