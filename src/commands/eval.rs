@@ -62,7 +62,7 @@ pub struct EvalArgs {
 
 /// Makes the predictions: the Vulkan renderer, or the CPU inference.
 enum Predictor {
-    Gpu(Context),
+    Gpu(Box<Context>),
     Cpu,
 }
 
@@ -82,7 +82,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         Predictor::Cpu
     } else {
         match Context::new(&ContextOptions::from_env()) {
-            Ok(ctx) => Predictor::Gpu(ctx),
+            Ok(ctx) => Predictor::Gpu(Box::new(ctx)),
             Err(e) => {
                 eprintln!("warning: no Vulkan device ({e}); predicting with the CPU inference");
                 Predictor::Cpu
@@ -140,7 +140,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         })
         .collect();
     if let Predictor::Gpu(ctx) = predictor {
-        let report = ctx.finish();
+        let report = (*ctx).finish();
         if !report.is_clean() {
             bail!("Vulkan reported {} validation messages; leaked {:?}", report.validation_messages, report.leaked);
         }
