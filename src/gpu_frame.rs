@@ -33,6 +33,11 @@ pub fn object_networks<'a>(scene: &Scene, model: &'a Model) -> Vec<Option<Object
         .collect()
 }
 
+/// The RGB of read-back RGBA pixels.
+pub fn rgb(rgba: &[f32]) -> Vec<Vec3> {
+    rgba.chunks_exact(4).map(|p| Vec3::new(p[0], p[1], p[2])).collect()
+}
+
 /// Images of one frame, read back: RGBA per pixel, rows top to bottom.
 pub struct FramePixels {
     pub direct: Vec<f32>,

@@ -290,6 +290,21 @@ impl NetworkPass {
     }
 }
 
+/// The bindings `network_storage.comp` and `network_specialized.comp` share: the G-buffer,
+/// the variant's buffer (weights or tile lists), then the outputs.
+fn network_bindings<'a>(gbuffer: &'a GBufferTargets, buffer: &'a Buffer, outputs: &'a NetworkOutputs) -> [Bind<'a>; 8] {
+    [
+        Bind::StorageImage(&gbuffer.position),
+        Bind::StorageImage(&gbuffer.normal),
+        Bind::StorageImage(&gbuffer.object),
+        Bind::StorageImage(&gbuffer.emission),
+        Bind::StorageBuffer(buffer),
+        Bind::StorageImage(&outputs.direct),
+        Bind::StorageImage(&outputs.indirect),
+        Bind::StorageImage(&outputs.gi),
+    ]
+}
+
 fn storage(
     ctx: &Context,
     spirv: &[u32],
@@ -310,16 +325,7 @@ fn storage(
         bytemuck::cast_slice(&weights),
         vk::BufferUsageFlags::STORAGE_BUFFER,
     )?;
-    let bindings = [
-        Bind::StorageImage(&gbuffer.position),
-        Bind::StorageImage(&gbuffer.normal),
-        Bind::StorageImage(&gbuffer.object),
-        Bind::StorageImage(&gbuffer.emission),
-        Bind::StorageBuffer(&weights),
-        Bind::StorageImage(&outputs.direct),
-        Bind::StorageImage(&outputs.indirect),
-        Bind::StorageImage(&outputs.gi),
-    ];
+    let bindings = network_bindings(gbuffer, &weights, outputs);
     let push = std::mem::size_of::<StoragePush>() as u32;
     match ComputePass::new(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE)) {
         Ok(pass) => Ok(Kind::Storage { pass, weights }),
@@ -399,16 +405,7 @@ fn specialized(
             push,
             (TILE, TILE),
         )?;
-        let network_bindings = [
-            Bind::StorageImage(&gbuffer.position),
-            Bind::StorageImage(&gbuffer.normal),
-            Bind::StorageImage(&gbuffer.object),
-            Bind::StorageImage(&gbuffer.emission),
-            Bind::StorageBuffer(&buffers[2]),
-            Bind::StorageImage(&outputs.direct),
-            Bind::StorageImage(&outputs.indirect),
-            Bind::StorageImage(&outputs.gi),
-        ];
+        let network_bindings = network_bindings(gbuffer, &buffers[2], outputs);
         let push = std::mem::size_of::<SpecializedPush>() as u32;
         let name = "network (specialization constants)";
         let networks = ComputePass::specialized(

@@ -20,7 +20,7 @@ use crate::eval::figure::{compose, Panel};
 use crate::eval::metrics::compare;
 use crate::eval::reference_cache::{default_cache_dir, reference};
 use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, ConfigReport, Report};
-use crate::gpu_frame::GpuFrame;
+use crate::gpu_frame::{rgb, GpuFrame};
 use crate::image_out::tonemap_rgb8;
 use crate::progress::Progress;
 
@@ -204,7 +204,6 @@ fn predict(
             let pixels = frame.render(ctx, &config.view, config.light);
             frame.destroy(ctx);
             let pixels = pixels?;
-            let rgb = |rgba: &[f32]| rgba.chunks_exact(4).map(|p| Vec3::new(p[0], p[1], p[2])).collect();
             Ok(Predicted { direct: rgb(&pixels.direct), indirect: rgb(&pixels.indirect), gi: rgb(&pixels.gi) })
         }
     }

@@ -15,7 +15,7 @@ use rrf_renderer::{vk, Context, ContextOptions};
 use super::bake::default_model_path;
 use super::variant::VariantArg;
 use super::view_args::{Component, ViewArgs};
-use crate::gpu_frame::GpuFrame;
+use crate::gpu_frame::{rgb, GpuFrame};
 use crate::image_out::write_image;
 
 #[derive(Args, Debug)]
@@ -99,5 +99,5 @@ fn gpu_render(
         Component::Indirect => &rendered.indirect,
         Component::Emitted => bail!("--component emitted is only available from `rrf reference`"),
     };
-    Ok((rgba.chunks_exact(4).map(|p| Vec3::new(p[0], p[1], p[2])).collect(), device))
+    Ok((rgb(rgba), device))
 }
