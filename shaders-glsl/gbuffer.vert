@@ -1,15 +1,18 @@
 #version 450
-// G-buffer pass, vertex stage: world-space attributes straight through.
+// G-buffer pass, vertex stage: world-space attributes straight through, except that the
+// moving light's own geometry follows the light by a per-frame offset.
 
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in vec4 in_emission_roughness;
 layout(location = 3) in uint in_object;
 
-layout(push_constant) uniform Camera {
+layout(push_constant) uniform Frame {
     mat4 view_projection;
     vec4 eye;
-} camera;
+    vec4 light_offset;
+    uint light_object; // object id + 1 of the moving light; 0: none
+} frame;
 
 layout(location = 0) out vec3 out_position;
 layout(location = 1) out vec3 out_normal;
@@ -17,9 +20,10 @@ layout(location = 2) out vec4 out_emission_roughness;
 layout(location = 3) flat out uint out_object;
 
 void main() {
-    out_position = in_position;
+    vec3 position = in_position + (in_object + 1u == frame.light_object ? frame.light_offset.xyz : vec3(0.0));
+    out_position = position;
     out_normal = in_normal;
     out_emission_roughness = in_emission_roughness;
     out_object = in_object;
-    gl_Position = camera.view_projection * vec4(in_position, 1.0);
+    gl_Position = frame.view_projection * vec4(position, 1.0);
 }

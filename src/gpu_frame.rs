@@ -1,4 +1,11 @@
-//! One frame on the GPU: the G-buffer pass, then the network pass, for a scene and a model.
+//! One frame on the GPU for a scene and a model: the G-buffer pass, the network pass, the
+//! tonemap pass and the overlay, as a list of passes whose barriers come from what they
+//! declare (`rrf_renderer::sync`).
+//!
+//! Camera, light, exposure and the component shown are per-frame constants: one `GpuFrame`
+//! serves every configuration of its size, and `resize` remakes only what depends on the size.
+
+use std::cell::RefCell;
 
 use anyhow::Result;
 use rrf_baker::glam::Vec3;
@@ -7,10 +14,13 @@ use rrf_baker::network::Component;
 use rrf_baker::scene::{Scene, View};
 use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets};
 use rrf_renderer::network_pass::{NetworkConstants, NetworkPass, NetworkShaders, ObjectNetworks, Variant};
+use rrf_renderer::overlay::{OverlayPass, TextGrid};
+use rrf_renderer::resources::read_back_passes;
+use rrf_renderer::sync::{run_passes, Pass, ResourceStates};
 use rrf_renderer::tonemap::TonemapPass;
 use rrf_renderer::{vk, Context, Image};
 
-use crate::gpu_scene::{camera_constants, gbuffer_vertices};
+use crate::gpu_scene::{gbuffer_constants, gbuffer_vertices, moving_light_object};
 use crate::shaders;
 
 /// Each object's networks, by object id; `None` for objects the model has none for.
@@ -45,33 +55,65 @@ pub struct FramePixels {
     pub gi: Vec<f32>,
 }
 
+/// Which light the display image shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Shown {
+    /// Emission + direct + indirect.
+    Gi,
+    Direct,
+    Indirect,
+}
+
+impl Shown {
+    pub fn name(self) -> &'static str {
+        match self {
+            Shown::Gi => "global",
+            Shown::Direct => "direct only",
+            Shown::Indirect => "indirect only",
+        }
+    }
+}
+
+/// What changes from frame to frame.
+#[derive(Clone, Debug)]
+pub struct FrameSettings {
+    pub view: View,
+    /// Where the moving light is.
+    pub light: Vec3,
+    /// 2^EV.
+    pub exposure_scale: f32,
+    pub shown: Shown,
+}
+
+/// Timestamps a frame writes: start, after the G-buffer, after the network pass, after the
+/// tonemap pass, after the rest (overlay, presentation blit, read-back).
+pub const TIMESTAMPS: u32 = 5;
+/// Names of the intervals between consecutive timestamps.
+pub const TIMED_PASSES: [&str; 4] = ["gbuffer", "network", "tonemap", "overlay+present"];
+
 pub struct GpuFrame {
     targets: GBufferTargets,
     mesh: GBufferMesh,
     gbuffer: GBufferPass,
     network: NetworkPass,
-    /// Display-referred output of the tonemap pass (RGBA8, sRGB-encoded).
+    /// Display-referred image (RGBA8, sRGB-encoded): what the tonemap pass writes, the overlay
+    /// draws on, the window shows and screenshots save.
     ldr: Image,
-    tonemap: TonemapPass,
+    /// Tonemap passes of the global, direct and indirect images.
+    tonemaps: [TonemapPass; 3],
+    overlay: OverlayPass,
+    /// Where the glTF puts the moving light.
+    default_light: Vec3,
+    /// The object id of the moving light's own geometry, which follows the light.
+    light_object: Option<u32>,
+    states: RefCell<ResourceStates>,
 }
 
-/// Timestamps a frame writes: start, after the G-buffer, after the network pass, after the
-/// tonemap pass.
-pub const TIMESTAMPS: u32 = 4;
-
 impl GpuFrame {
-    /// Everything for frames of `scene` at `extent` with network pass `variant`, with the
-    /// moving light `light_offset` from where the glTF puts it.
-    pub fn new(
-        ctx: &Context,
-        scene: &Scene,
-        model: &Model,
-        variant: Variant,
-        extent: vk::Extent2D,
-        light_offset: Vec3,
-    ) -> Result<Self> {
+    /// Everything for frames of `scene` at `extent` with network pass `variant`.
+    pub fn new(ctx: &Context, scene: &Scene, model: &Model, variant: Variant, extent: vk::Extent2D) -> Result<Self> {
         let targets = GBufferTargets::new(ctx, extent)?;
-        let mesh = GBufferMesh::new(ctx, &gbuffer_vertices(scene, light_offset))?;
+        let mesh = GBufferMesh::new(ctx, &gbuffer_vertices(scene))?;
         let gbuffer = GBufferPass::new(ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG)?;
         let network_shaders = NetworkShaders {
             storage: shaders::NETWORK_STORAGE_COMP,
@@ -79,82 +121,191 @@ impl GpuFrame {
             specialized: shaders::NETWORK_SPECIALIZED_COMP,
         };
         let network = NetworkPass::new(ctx, variant, &network_shaders, &targets, &object_networks(scene, model))?;
-        let ldr = ctx.create_image(
-            "ldr",
-            extent,
-            vk::Format::R8G8B8A8_UNORM,
-            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-        )?;
-        ctx.submit_once(|cmd| ctx.transition(cmd, &ldr, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL))?;
-        let tonemap = TonemapPass::new(ctx, shaders::TONEMAP_COMP, &network.outputs.gi, &ldr)?;
-        Ok(GpuFrame { targets, mesh, gbuffer, network, ldr, tonemap })
+        let ldr = create_ldr(ctx, extent)?;
+        let outputs = &network.outputs;
+        let tonemaps = [
+            TonemapPass::new(ctx, shaders::TONEMAP_COMP, &outputs.gi, &ldr)?,
+            TonemapPass::new(ctx, shaders::TONEMAP_COMP, &outputs.direct, &ldr)?,
+            TonemapPass::new(ctx, shaders::TONEMAP_COMP, &outputs.indirect, &ldr)?,
+        ];
+        let overlay = OverlayPass::new(ctx, shaders::OVERLAY_COMP, &font8x8::legacy::BASIC_LEGACY, &ldr)?;
+        let default_light = scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position);
+        let frame = GpuFrame {
+            targets,
+            mesh,
+            gbuffer,
+            network,
+            ldr,
+            tonemaps,
+            overlay,
+            default_light,
+            light_object: moving_light_object(scene),
+            states: RefCell::default(),
+        };
+        frame.register();
+        Ok(frame)
+    }
+
+    /// Tells the barrier tracker where set-up left every image.
+    fn register(&self) {
+        let mut states = self.states.borrow_mut();
+        self.targets.register(&mut states);
+        self.network.register(&mut states);
+        states.set_layout(&self.ldr, vk::ImageLayout::GENERAL);
     }
 
     pub fn extent(&self) -> vk::Extent2D {
         self.targets.extent
     }
 
-    /// Records the frame's passes; with `timestamps`, writes [`TIMESTAMPS`] of them there.
-    pub fn record(
-        &self,
-        ctx: &Context,
-        cmd: vk::CommandBuffer,
-        view: &View,
-        light: Vec3,
-        exposure_scale: f32,
-        timestamps: Option<vk::QueryPool>,
-    ) {
-        let extent = self.targets.extent;
-        let camera = camera_constants(view, extent.width as f32 / extent.height as f32);
-        let constants = NetworkConstants { eye: camera.eye, light: light.extend(1.0).to_array() };
-        let stamp = |index: u32, stage: vk::PipelineStageFlags| {
-            if let Some(pool) = timestamps {
-                // SAFETY: the pool holds TIMESTAMPS queries, reset below before the first.
-                unsafe { ctx.device.cmd_write_timestamp(cmd, stage, pool, index) };
+    /// The display image (RGBA8, sRGB-encoded).
+    pub fn ldr(&self) -> &Image {
+        &self.ldr
+    }
+
+    /// The barrier tracker, for passes that the caller adds to a frame.
+    pub fn states(&self) -> std::cell::RefMut<'_, ResourceStates> {
+        self.states.borrow_mut()
+    }
+
+    /// Remakes the images for `extent`; pipelines and the mesh stay. No frame that uses this
+    /// one may be pending. On failure the frame keeps its old size.
+    pub fn resize(&mut self, ctx: &Context, extent: vk::Extent2D) -> Result<()> {
+        if extent == self.extent() {
+            return Ok(());
+        }
+        let targets = GBufferTargets::new(ctx, extent)?;
+        let ldr = match create_ldr(ctx, extent) {
+            Ok(ldr) => ldr,
+            Err(e) => {
+                targets.destroy(ctx);
+                return Err(e);
             }
         };
-        if let Some(pool) = timestamps {
-            // SAFETY: recording outside a render pass; the pool belongs to this device.
-            unsafe { ctx.device.cmd_reset_query_pool(cmd, pool, 0, TIMESTAMPS) };
+        if let Err(e) = self.network.resize(ctx, &targets) {
+            targets.destroy(ctx);
+            ctx.destroy_image(ldr);
+            return Err(e.into());
         }
-        stamp(0, vk::PipelineStageFlags::TOP_OF_PIPE);
-        self.gbuffer.record(ctx, cmd, &self.targets, &self.mesh, &camera);
-        stamp(1, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
-        ctx.memory_barrier(
-            cmd,
-            (vk::PipelineStageFlags::COLOR_ATTACHMENT_OUTPUT, vk::AccessFlags::COLOR_ATTACHMENT_WRITE),
-            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
-        );
-        self.network.record(ctx, cmd, &constants);
-        stamp(2, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
-        ctx.memory_barrier(
-            cmd,
-            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_WRITE),
-            (vk::PipelineStageFlags::COMPUTE_SHADER, vk::AccessFlags::SHADER_READ),
-        );
-        self.tonemap.record(ctx, cmd, extent, exposure_scale);
-        stamp(3, vk::PipelineStageFlags::BOTTOM_OF_PIPE);
+        std::mem::replace(&mut self.targets, targets).destroy(ctx);
+        ctx.destroy_image(std::mem::replace(&mut self.ldr, ldr));
+        let outputs = &self.network.outputs;
+        for (pass, hdr) in self.tonemaps.iter().zip([&outputs.gi, &outputs.direct, &outputs.indirect]) {
+            pass.rebind(ctx, hdr, &self.ldr);
+        }
+        self.overlay.rebind(ctx, &self.ldr);
+        *self.states.borrow_mut() = ResourceStates::default();
+        self.register();
+        Ok(())
+    }
+
+    /// Records a frame: the G-buffer, network, tonemap and (with `overlay`, at a scale in
+    /// screen pixels per font pixel) overlay passes, then `extra` passes (presentation,
+    /// read-back). With `timestamps`, a pool reset for this frame, writes [`TIMESTAMPS`].
+    pub fn record<'a>(
+        &'a self,
+        ctx: &'a Context,
+        cmd: vk::CommandBuffer,
+        settings: &FrameSettings,
+        overlay: Option<(&TextGrid, u32)>,
+        timestamps: Option<vk::QueryPool>,
+        extra: Vec<Pass<'a>>,
+    ) {
+        let extent = self.extent();
+        let aspect = extent.width as f32 / extent.height as f32;
+        let g = gbuffer_constants(&settings.view, aspect, settings.light - self.default_light, self.light_object);
+        let n = NetworkConstants { eye: g.eye, light: settings.light.extend(1.0).to_array() };
+        let mut passes = vec![self.gbuffer.pass(ctx, &self.targets, &self.mesh, g)];
+        let stamp = |passes: &mut Vec<Pass>, index: u32| {
+            if let (Some(pool), Some(last)) = (timestamps, passes.last_mut()) {
+                last.timestamp = Some((pool, index));
+            }
+        };
+        stamp(&mut passes, 1);
+        passes.extend(self.network.passes(ctx, &self.targets, n));
+        stamp(&mut passes, 2);
+        let outputs = &self.network.outputs;
+        let (tonemap, hdr) = match settings.shown {
+            Shown::Gi => (&self.tonemaps[0], &outputs.gi),
+            Shown::Direct => (&self.tonemaps[1], &outputs.direct),
+            Shown::Indirect => (&self.tonemaps[2], &outputs.indirect),
+        };
+        passes.push(tonemap.pass(ctx, hdr, &self.ldr, settings.exposure_scale));
+        stamp(&mut passes, 3);
+        if let Some((grid, scale)) = overlay {
+            passes.extend(self.overlay.passes(ctx, &self.ldr, grid, scale));
+        }
+        // The last interval always ends with a pass, even an empty one.
+        passes.extend(extra);
+        passes.push(Pass::new("end of frame", vec![], |_| {}));
+        stamp(&mut passes, 4);
+        if let Some(pool) = timestamps {
+            // SAFETY: the pool holds TIMESTAMPS queries and was reset for this frame.
+            unsafe { ctx.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool, 0) };
+        }
+        run_passes(ctx, cmd, &mut self.states.borrow_mut(), passes);
+    }
+
+    /// Renders one frame and reads the HDR images back.
+    pub fn render(&self, ctx: &Context, settings: &FrameSettings) -> Result<FramePixels> {
+        let outputs = &self.network.outputs;
+        let images = [&outputs.direct, &outputs.indirect, &outputs.gi];
+        let mut buffers = Vec::new();
+        let read = (|| {
+            for image in images {
+                buffers.push(ctx.create_readback_buffer(image)?);
+            }
+            ctx.submit_once(|cmd| {
+                let extra = images.iter().zip(&buffers).flat_map(|(i, b)| read_back_passes(ctx, i, b)).collect();
+                self.record(ctx, cmd, settings, None, None, extra);
+            })?;
+            let decode = |i: usize| ctx.decode(images[i].format, &buffers[i]);
+            Ok(FramePixels { direct: decode(0)?, indirect: decode(1)?, gi: decode(2)? })
+        })();
+        for buffer in buffers {
+            ctx.destroy_buffer(buffer);
+        }
+        read
     }
 
     /// Object ids + 1 of the last frame's pixels (0: nothing).
     pub fn read_objects(&self, ctx: &Context) -> Result<Vec<u32>> {
-        Ok(ctx.read_image(&self.targets.object, vk::ImageLayout::GENERAL)?.iter().map(|&v| v as u32).collect())
-    }
-
-    /// Renders `view` with the light at `light` and reads the HDR images back.
-    pub fn render(&self, ctx: &Context, view: &View, light: Vec3) -> Result<FramePixels> {
-        ctx.submit_once(|cmd| self.record(ctx, cmd, view, light, 1.0, None))?;
-        let read = |image| ctx.read_image(image, vk::ImageLayout::GENERAL);
-        let outputs = &self.network.outputs;
-        Ok(FramePixels { direct: read(&outputs.direct)?, indirect: read(&outputs.indirect)?, gi: read(&outputs.gi)? })
+        let image = &self.targets.object;
+        let buffer = ctx.create_readback_buffer(image)?;
+        let read = ctx
+            .submit_once(|cmd| {
+                run_passes(ctx, cmd, &mut self.states.borrow_mut(), read_back_passes(ctx, image, &buffer).into())
+            })
+            .and_then(|()| ctx.decode(image.format, &buffer));
+        ctx.destroy_buffer(buffer);
+        Ok(read?.iter().map(|&v| v as u32).collect())
     }
 
     pub fn destroy(self, ctx: &Context) {
-        self.tonemap.destroy(ctx);
+        self.overlay.destroy(ctx);
+        for pass in self.tonemaps {
+            pass.destroy(ctx);
+        }
         ctx.destroy_image(self.ldr);
         self.network.destroy(ctx);
         self.gbuffer.destroy(ctx);
         self.mesh.destroy(ctx);
         self.targets.destroy(ctx);
     }
+}
+
+fn create_ldr(ctx: &Context, extent: vk::Extent2D) -> Result<Image> {
+    let ldr = ctx.create_image(
+        "ldr",
+        extent,
+        vk::Format::R8G8B8A8_UNORM,
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+    )?;
+    if let Err(e) =
+        ctx.submit_once(|cmd| ctx.transition(cmd, &ldr, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL))
+    {
+        ctx.destroy_image(ldr);
+        return Err(e.into());
+    }
+    Ok(ldr)
 }

@@ -1,26 +1,29 @@
-//! What the renderer gets from a scene: flat G-buffer vertices and camera constants. The
+//! What the renderer gets from a scene: flat G-buffer vertices and per-frame constants. The
 //! camera matches the path tracer's ([`rrf_baker::trace::Camera`]) pixel for pixel.
 
 use rrf_baker::glam::{Mat4, Vec3, Vec4};
 use rrf_baker::scene::{LightKind, Scene, View};
-use rrf_renderer::gbuffer::{CameraConstants, GBufferVertex};
+use rrf_renderer::gbuffer::{GBufferConstants, GBufferVertex};
 
-/// Every triangle of the scene, vertex by vertex, with the moving area light moved by
-/// `light_offset`.
-pub fn gbuffer_vertices(scene: &Scene, light_offset: Vec3) -> Vec<GBufferVertex> {
-    let moving = match scene.moving_light.as_ref().map(|l| l.kind) {
+/// The object id of the moving light's own geometry (an area light), if it has any.
+pub fn moving_light_object(scene: &Scene) -> Option<u32> {
+    match scene.moving_light.as_ref().map(|l| l.kind) {
         Some(LightKind::Area(id)) => Some(id),
         _ => None,
-    };
+    }
+}
+
+/// Every triangle of the scene, vertex by vertex, where the glTF puts it; the moving light's
+/// geometry follows the light through [`GBufferConstants::light_offset`].
+pub fn gbuffer_vertices(scene: &Scene) -> Vec<GBufferVertex> {
     let mut out = Vec::with_capacity(scene.triangle_count() * 3);
     for object in &scene.objects {
-        let shift = if Some(object.id) == moving { light_offset } else { Vec3::ZERO };
         for part in &object.parts {
             let m = &scene.materials[part.material as usize];
             for t in part.triangles.clone() {
                 for &v in &object.triangles[t as usize] {
                     out.push(GBufferVertex {
-                        position: (object.positions[v as usize] + shift).to_array(),
+                        position: object.positions[v as usize].to_array(),
                         normal: object.normals[v as usize].to_array(),
                         emission_roughness: m.emission.extend(m.roughness).to_array(),
                         object: object.id,
@@ -32,8 +35,10 @@ pub fn gbuffer_vertices(scene: &Scene, light_offset: Vec3) -> Vec<GBufferVertex>
     out
 }
 
-/// View-projection into Vulkan clip space (y down, depth 0 at `NEAR` to 1 at `FAR`).
-pub fn camera_constants(view: &View, aspect: f32) -> CameraConstants {
+/// The G-buffer pass's constants: the view-projection into Vulkan clip space (y down, depth
+/// 0 at `NEAR` to 1 at `FAR`), and the geometry of object `light_object` (the moving light's)
+/// moved by `light_offset`.
+pub fn gbuffer_constants(view: &View, aspect: f32, light_offset: Vec3, light_object: Option<u32>) -> GBufferConstants {
     const NEAR: f32 = 0.01;
     const FAR: f32 = 1000.0;
     let forward = (view.target - view.eye).normalize();
@@ -53,8 +58,11 @@ pub fn camera_constants(view: &View, aspect: f32) -> CameraConstants {
         Vec4::new(0.0, 0.0, a, -1.0),
         Vec4::new(0.0, 0.0, b, 0.0),
     );
-    CameraConstants {
+    GBufferConstants {
         view_projection: (projection * world_to_view).to_cols_array_2d(),
         eye: view.eye.extend(1.0).to_array(),
+        light_offset: light_offset.extend(0.0).to_array(),
+        light_object: light_object.map_or(0, |id| id + 1),
+        pad: [0; 3],
     }
 }

@@ -11,3 +11,4 @@ pub mod gpu_scene;
 pub mod image_out;
 pub mod progress;
 pub mod shaders;
+pub mod viewer;

@@ -55,6 +55,12 @@ enum Command {
     /// Writes DIR/metrics.json, DIR/index.html and the figures. References are cached under
     /// the scene's .cache/ folder, so a second eval only renders what changed.
     Eval(rrf::commands::eval::EvalArgs),
+    /// Fly through a scene and move its light, with global illumination from the networks at
+    /// interactive rates; or play a script of camera and light moves, for tests and demos.
+    ///
+    /// Opens a window on the Vulkan device (RRF_DEVICE picks one). Without a display it
+    /// renders headless and says where the image went.
+    View(rrf::commands::view::ViewArgs),
 }
 
 fn main() -> ExitCode {
@@ -66,6 +72,7 @@ fn main() -> ExitCode {
         Command::Render(args) => rrf::commands::render::run(&args),
         Command::Bench(args) => rrf::commands::bench::run(&args),
         Command::Eval(args) => rrf::commands::eval::run(&args),
+        Command::View(args) => rrf::commands::view::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

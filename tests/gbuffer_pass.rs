@@ -5,7 +5,7 @@ mod common;
 use std::path::Path;
 
 use common::{finish_clean, gpu};
-use rrf::gpu_scene::{camera_constants, gbuffer_vertices};
+use rrf::gpu_scene::{gbuffer_constants, gbuffer_vertices};
 use rrf::shaders;
 use rrf_baker::glam::{Vec2, Vec3};
 use rrf_baker::scene::Scene;
@@ -21,9 +21,10 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
     let ctx = gpu();
     let extent = vk::Extent2D { width, height };
     let targets = GBufferTargets::new(&ctx, extent).unwrap();
-    let mesh = GBufferMesh::new(&ctx, &gbuffer_vertices(&scene, Vec3::ZERO)).unwrap();
+    let mesh = GBufferMesh::new(&ctx, &gbuffer_vertices(&scene)).unwrap();
     let pass = GBufferPass::new(&ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG).unwrap();
-    ctx.submit_once(|cmd| pass.record(&ctx, cmd, &targets, &mesh, &camera_constants(&view, aspect))).unwrap();
+    ctx.submit_once(|cmd| pass.record(&ctx, cmd, &targets, &mesh, &gbuffer_constants(&view, aspect, Vec3::ZERO, None)))
+        .unwrap();
     let position = ctx.read_image(&targets.position, vk::ImageLayout::GENERAL).unwrap();
     let normal = ctx.read_image(&targets.normal, vk::ImageLayout::GENERAL).unwrap();
     let object = ctx.read_image(&targets.object, vk::ImageLayout::GENERAL).unwrap();

@@ -6,7 +6,7 @@ mod common;
 use std::path::Path;
 
 use common::{finish_clean, gpu};
-use rrf::gpu_frame::GpuFrame;
+use rrf::gpu_frame::{FrameSettings, GpuFrame, Shown};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
@@ -23,15 +23,23 @@ fn compare(scene_name: &str, view_name: &str, light: Vec3, width: u32, height: u
     let scene = Scene::load(&dir).unwrap();
     let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
     let view = scene.view(view_name).unwrap().clone();
-    let offset = light - scene.moving_light.as_ref().unwrap().default_position;
+    let default_light = scene.moving_light.as_ref().unwrap().default_position;
 
     let ctx = gpu();
     let extent = vk::Extent2D { width, height };
     let rendered: Vec<_> = Variant::ALL
         .iter()
         .map(|&variant| {
-            let frame = GpuFrame::new(&ctx, &scene, &model, variant, extent, offset).unwrap();
-            let pixels = frame.render(&ctx, &view, light).unwrap();
+            // One frame serves every configuration: it starts at another size with the light
+            // where the glTF puts it, then is resized and the light moved.
+            let start = vk::Extent2D { width: width / 2 + 3, height: height / 2 + 1 };
+            let mut frame = GpuFrame::new(&ctx, &scene, &model, variant, start).unwrap();
+            let mut settings =
+                FrameSettings { view: view.clone(), light: default_light, exposure_scale: 1.0, shown: Shown::Gi };
+            frame.render(&ctx, &settings).unwrap();
+            frame.resize(&ctx, extent).unwrap();
+            settings.light = light;
+            let pixels = frame.render(&ctx, &settings).unwrap();
             frame.destroy(&ctx);
             (variant, pixels)
         })

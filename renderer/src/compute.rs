@@ -155,6 +155,13 @@ impl ComputePass {
         }
     }
 
+    /// Points the descriptor set at other resources of the same kinds and order (after a
+    /// resize). No submitted command buffer that uses the pass may still be pending.
+    pub fn rebind(&self, ctx: &Context, bindings: &[Bind<'_>]) {
+        // SAFETY: the set belongs to this device and, as the caller guarantees, is not in use.
+        unsafe { write_set(&ctx.device, self.set, bindings) };
+    }
+
     /// Records a dispatch of the first pipeline that covers `width × height` invocations.
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, push: &[u8], width: u32, height: u32) {
         self.record_pipeline(ctx, cmd, 0, push, Dispatch::Covering { width, height });

@@ -58,7 +58,7 @@ impl TeardownReport {
 
 /// One Vulkan device with one queue that does graphics, compute and transfer.
 pub struct Context {
-    _entry: ash::Entry,
+    entry: ash::Entry,
     pub instance: ash::Instance,
     pub physical_device: vk::PhysicalDevice,
     pub device: ash::Device,
@@ -112,10 +112,18 @@ impl Context {
             );
         }
         let has_debug_utils = available.iter().any(|e| e.extension_name_as_c_str() == Ok(ash::ext::debug_utils::NAME));
+        let has_validation_features = use_validation
+            && available.iter().any(|e| e.extension_name_as_c_str() == Ok(ash::ext::validation_features::NAME));
+        if use_validation && options.validation == Validation::Required && !has_validation_features {
+            return Err(Error::ValidationLayerMissing);
+        }
 
         let mut extensions: Vec<*const c_char> = options.instance_extensions.iter().map(|e| e.as_ptr()).collect();
         if has_debug_utils {
             extensions.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
+        if has_validation_features {
+            extensions.push(ash::ext::validation_features::NAME.as_ptr());
         }
         let layer_names = if use_validation { vec![VALIDATION_LAYER.as_ptr()] } else { vec![] };
         let app = vk::ApplicationInfo::default().application_name(c"rrf").engine_name(c"rrf").api_version(API_VERSION);
@@ -128,6 +136,14 @@ impl Context {
             .enabled_extension_names(&extensions);
         if has_debug_utils {
             instance_info = instance_info.push_next(&mut instance_messenger);
+        }
+        // Synchronization validation, on top of the core checks: a missing or too weak barrier
+        // between passes, or between frames in flight, is reported like any other error.
+        let enabled_features = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+        let mut validation_features =
+            vk::ValidationFeaturesEXT::default().enabled_validation_features(&enabled_features);
+        if has_validation_features {
+            instance_info = instance_info.push_next(&mut validation_features);
         }
         // SAFETY: every pointer in the create info outlives the call.
         let instance = unsafe { entry.create_instance(&instance_info, None) }.map_err(|result| match result {
@@ -166,7 +182,8 @@ impl Context {
         let queues =
             [vk::DeviceQueueCreateInfo::default().queue_family_index(queue_family).queue_priorities(&priorities)];
         // Dynamic rendering (core in 1.3) replaces render pass objects for the G-buffer pass.
-        let mut vulkan13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true);
+        // Barriers are recorded with vkCmdPipelineBarrier2 (synchronization2, also core in 1.3).
+        let mut vulkan13 = vk::PhysicalDeviceVulkan13Features::default().dynamic_rendering(true).synchronization2(true);
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
             .enabled_extension_names(&device_extensions)
@@ -203,7 +220,7 @@ impl Context {
         };
 
         let context = Self {
-            _entry: entry,
+            entry,
             instance,
             physical_device,
             device,
@@ -219,6 +236,12 @@ impl Context {
         context.set_name(context.queue, "main queue");
         context.set_name(context.command_pool, "one-shot command pool");
         Ok(context)
+    }
+
+    /// The loaded Vulkan entry points (for extensions made outside the context, such as a
+    /// window surface).
+    pub fn entry(&self) -> &ash::Entry {
+        &self.entry
     }
 
     /// Validation warnings and errors reported so far.
@@ -243,6 +266,22 @@ impl Context {
         let info = vk::DebugUtilsObjectNameInfoEXT::default().object_handle(handle).object_name(&name);
         // SAFETY: the handle belongs to this device. Naming is best effort.
         let _ = unsafe { debug.device.set_debug_utils_object_name(&info) };
+    }
+
+    /// Opens a named region of `cmd` that validation messages and GPU debuggers show.
+    pub fn begin_label(&self, cmd: vk::CommandBuffer, name: &str) {
+        let Some(debug) = &self.debug else { return };
+        let Ok(name) = std::ffi::CString::new(name) else { return };
+        // SAFETY: `cmd` is recording; the label is closed by `end_label`.
+        unsafe { debug.device.cmd_begin_debug_utils_label(cmd, &vk::DebugUtilsLabelEXT::default().label_name(&name)) };
+    }
+
+    /// Closes the region `begin_label` opened.
+    pub fn end_label(&self, cmd: vk::CommandBuffer) {
+        if let Some(debug) = &self.debug {
+            // SAFETY: pairs with a `begin_label` on the same command buffer.
+            unsafe { debug.device.cmd_end_debug_utils_label(cmd) };
+        }
     }
 
     /// Records commands with `record`, submits them and waits for them to finish.

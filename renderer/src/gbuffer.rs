@@ -8,6 +8,7 @@ use gpu_allocator::MemoryLocation;
 use crate::context::Context;
 use crate::error::{Result, VkContext};
 use crate::resources::{Buffer, Image};
+use crate::sync::{Access, Pass, ResourceStates, Use};
 
 /// One vertex, in world space. Triangles are listed vertex by vertex (no index buffer).
 #[repr(C)]
@@ -20,13 +21,17 @@ pub struct GBufferVertex {
     pub object: u32,
 }
 
-/// Camera constants: a column-major view-projection matrix (Vulkan clip space: y down,
-/// depth 0..1) and the eye position.
+/// Per-frame constants of the pass: a column-major view-projection matrix (Vulkan clip space:
+/// y down, depth 0..1), the eye, and the moving light's offset from where the mesh has it,
+/// applied to the vertices of object `light_object - 1` (0: no object moves).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct CameraConstants {
+pub struct GBufferConstants {
     pub view_projection: [[f32; 4]; 4],
     pub eye: [f32; 4],
+    pub light_offset: [f32; 4],
+    pub light_object: u32,
+    pub pad: [u32; 3],
 }
 
 pub const POSITION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
@@ -77,6 +82,14 @@ impl GBufferTargets {
 
     fn colors(&self) -> [&Image; 4] {
         [&self.position, &self.normal, &self.object, &self.emission]
+    }
+
+    /// Records where `new` left the images.
+    pub fn register(&self, states: &mut ResourceStates) {
+        for image in self.colors() {
+            states.set_layout(image, vk::ImageLayout::GENERAL);
+        }
+        states.set_layout(&self.depth, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
     }
 
     pub fn destroy(self, ctx: &Context) {
@@ -135,7 +148,7 @@ impl GBufferPass {
         let device = &ctx.device;
         let push = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::VERTEX)
-            .size(std::mem::size_of::<CameraConstants>() as u32)];
+            .size(std::mem::size_of::<GBufferConstants>() as u32)];
         // SAFETY: valid create infos that outlive the calls; objects destroyed in `destroy`.
         unsafe {
             let layout = device
@@ -226,6 +239,21 @@ impl GBufferPass {
         }
     }
 
+    /// The pass for a frame list: it writes every target and reads the mesh.
+    pub fn pass<'a>(
+        &'a self,
+        ctx: &'a Context,
+        targets: &'a GBufferTargets,
+        mesh: &'a GBufferMesh,
+        constants: GBufferConstants,
+    ) -> Pass<'a> {
+        let mut uses: Vec<Use> =
+            targets.colors().iter().map(|i| Use::image(i, Access::COLOR_ATTACHMENT_WRITE)).collect();
+        uses.push(Use::image(&targets.depth, Access::DEPTH_ATTACHMENT));
+        uses.push(Use::buffer(&mesh.buffer, Access::VERTEX_READ));
+        Pass::new("gbuffer", uses, move |cmd| self.record(ctx, cmd, targets, mesh, &constants))
+    }
+
     /// Records the pass: clears the targets and draws `mesh` seen through `camera`. The color
     /// targets are in `GENERAL` layout before and after.
     pub fn record(
@@ -234,7 +262,7 @@ impl GBufferPass {
         cmd: vk::CommandBuffer,
         targets: &GBufferTargets,
         mesh: &GBufferMesh,
-        camera: &CameraConstants,
+        camera: &GBufferConstants,
     ) {
         let device = &ctx.device;
         let clear = |c: vk::ClearColorValue| vk::ClearValue { color: c };

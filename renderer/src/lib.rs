@@ -7,9 +7,13 @@ pub mod compute;
 pub mod context;
 pub mod device_info;
 pub mod error;
+pub mod frames;
 pub mod gbuffer;
 pub mod network_pass;
+pub mod overlay;
 pub mod resources;
+pub mod swapchain;
+pub mod sync;
 pub mod tonemap;
 pub mod validation;
 

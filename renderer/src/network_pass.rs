@@ -19,6 +19,7 @@ use crate::context::Context;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBufferTargets;
 use crate::resources::{Buffer, Image};
+use crate::sync::{Access, Pass, ResourceStates, Use};
 
 pub const INPUTS: usize = 13;
 const HIDDEN1: usize = 20;
@@ -184,6 +185,53 @@ pub struct NetworkOutputs {
     pub gi: Image,
 }
 
+impl NetworkOutputs {
+    fn new(ctx: &Context, extent: vk::Extent2D) -> Result<Self> {
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
+        let format = vk::Format::R32G32B32A32_SFLOAT;
+        let direct = ctx.create_image("direct", extent, format, usage)?;
+        let made = (|| {
+            let indirect = ctx.create_image("indirect", extent, format, usage)?;
+            match ctx.create_image("gi", extent, format, usage) {
+                Ok(gi) => Ok((indirect, gi)),
+                Err(e) => {
+                    ctx.destroy_image(indirect);
+                    Err(e)
+                }
+            }
+        })();
+        let outputs = match made {
+            Ok((indirect, gi)) => NetworkOutputs { direct, indirect, gi },
+            Err(e) => {
+                ctx.destroy_image(direct);
+                return Err(e);
+            }
+        };
+        let transitioned = ctx.submit_once(|cmd| {
+            for image in outputs.all() {
+                ctx.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
+            }
+        });
+        match transitioned {
+            Ok(()) => Ok(outputs),
+            Err(e) => {
+                outputs.destroy(ctx);
+                Err(e)
+            }
+        }
+    }
+
+    pub fn all(&self) -> [&Image; 3] {
+        [&self.direct, &self.indirect, &self.gi]
+    }
+
+    fn destroy(self, ctx: &Context) {
+        for image in [self.direct, self.indirect, self.gi] {
+            ctx.destroy_image(image);
+        }
+    }
+}
+
 pub struct NetworkPass {
     variant: Variant,
     extent: vk::Extent2D,
@@ -203,14 +251,16 @@ struct Specialized {
     /// Object id of each pipeline.
     objects: Vec<usize>,
     object_count: u32,
-    tile_capacity: u32,
+    tiled: bool,
     /// 1 per object with networks, 0 otherwise.
     trained: Buffer,
     /// A `VkDispatchIndirectCommand` per object id.
     dispatch: Buffer,
     /// What `dispatch` is reset to before each frame: no tiles, y = z = 1.
     dispatch_reset: Vec<u32>,
+    /// Tile lists: `tile_capacity` entries per object id; sized with the image.
     tiles: Buffer,
+    tile_capacity: u32,
 }
 
 impl NetworkPass {
@@ -223,18 +273,7 @@ impl NetworkPass {
         gbuffer: &GBufferTargets,
         objects: &[Option<ObjectNetworks>],
     ) -> Result<Self> {
-        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-        let format = vk::Format::R32G32B32A32_SFLOAT;
-        let outputs = NetworkOutputs {
-            direct: ctx.create_image("direct", gbuffer.extent, format, usage)?,
-            indirect: ctx.create_image("indirect", gbuffer.extent, format, usage)?,
-            gi: ctx.create_image("gi", gbuffer.extent, format, usage)?,
-        };
-        ctx.submit_once(|cmd| {
-            for image in [&outputs.direct, &outputs.indirect, &outputs.gi] {
-                ctx.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
-            }
-        })?;
+        let outputs = NetworkOutputs::new(ctx, gbuffer.extent)?;
         let kind = match variant {
             Variant::Storage => storage(ctx, shaders.storage, gbuffer, &outputs, objects),
             Variant::PerObject | Variant::Tiled => {
@@ -245,9 +284,7 @@ impl NetworkPass {
         match kind {
             Ok(kind) => Ok(NetworkPass { variant, extent: gbuffer.extent, outputs, kind }),
             Err(e) => {
-                for image in [outputs.direct, outputs.indirect, outputs.gi] {
-                    ctx.destroy_image(image);
-                }
+                outputs.destroy(ctx);
                 Err(e)
             }
         }
@@ -257,15 +294,106 @@ impl NetworkPass {
         self.variant
     }
 
-    /// Records the pass; the G-buffer must be written and visible to compute shaders.
-    pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, constants: &NetworkConstants) {
-        let extent = self.extent;
-        match &self.kind {
-            Kind::Storage { pass, .. } => {
-                let push = StoragePush { eye: constants.eye, light: constants.light };
-                pass.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height);
+    /// Records where `new` and `resize` left the outputs.
+    pub fn register(&self, states: &mut ResourceStates) {
+        for image in self.outputs.all() {
+            states.set_layout(image, vk::ImageLayout::GENERAL);
+        }
+    }
+
+    /// Remakes the size-dependent resources for `gbuffer`'s new size and points the pipelines
+    /// at them; the pipelines stay. No frame that uses the pass may be pending. On failure the
+    /// pass keeps its old resources.
+    pub fn resize(&mut self, ctx: &Context, gbuffer: &GBufferTargets) -> Result<()> {
+        let extent = gbuffer.extent;
+        let outputs = NetworkOutputs::new(ctx, extent)?;
+        let tiles = match &self.kind {
+            Kind::Specialized(s) => match tile_buffer(ctx, s.object_count as usize, extent) {
+                Ok(tiles) => Some(tiles),
+                Err(e) => {
+                    outputs.destroy(ctx);
+                    return Err(e);
+                }
+            },
+            Kind::Storage { .. } => None,
+        };
+        let old = std::mem::replace(&mut self.outputs, outputs);
+        old.destroy(ctx);
+        self.extent = extent;
+        match &mut self.kind {
+            Kind::Storage { pass, weights } => pass.rebind(ctx, &network_bindings(gbuffer, weights, &self.outputs)),
+            Kind::Specialized(s) => {
+                if let Some((tiles, capacity)) = tiles {
+                    ctx.destroy_buffer(std::mem::replace(&mut s.tiles, tiles));
+                    s.tile_capacity = capacity;
+                }
+                s.classify.rebind(ctx, &classify_bindings(gbuffer, &s.trained, &s.dispatch, &s.tiles, &self.outputs));
+                s.networks.rebind(ctx, &network_bindings(gbuffer, &s.tiles, &self.outputs));
             }
-            Kind::Specialized(s) => s.record(ctx, cmd, extent, self.variant == Variant::Tiled, constants),
+        }
+        Ok(())
+    }
+
+    /// The pass's steps for a frame list. The G-buffer must be the one the pass was made
+    /// (or last resized) for.
+    pub fn passes<'a>(&'a self, ctx: &'a Context, gbuffer: &'a GBufferTargets, c: NetworkConstants) -> Vec<Pass<'a>> {
+        let extent = self.extent;
+        let read = |image| Use::image(image, Access::COMPUTE_READ);
+        let g = [&gbuffer.position, &gbuffer.normal, &gbuffer.object, &gbuffer.emission];
+        let writes = self.outputs.all().map(|image| Use::image(image, Access::COMPUTE_WRITE));
+        match &self.kind {
+            Kind::Storage { pass, weights } => {
+                let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
+                uses.push(Use::buffer(weights, Access::COMPUTE_READ));
+                uses.extend(writes);
+                let push = StoragePush { eye: c.eye, light: c.light };
+                vec![Pass::new("network (storage buffer)", uses, move |cmd| {
+                    pass.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
+                })]
+            }
+            Kind::Specialized(s) => {
+                let reset = Pass::new(
+                    "network dispatch reset",
+                    vec![Use::buffer(&s.dispatch, Access::TRANSFER_WRITE)],
+                    |cmd| {
+                        // SAFETY: recording outside a render pass; at most 12 KiB (MAX_OBJECTS),
+                        // under vkCmdUpdateBuffer's 64 KiB.
+                        unsafe {
+                            ctx.device.cmd_update_buffer(
+                                cmd,
+                                s.dispatch.raw,
+                                0,
+                                bytemuck::cast_slice(&s.dispatch_reset),
+                            )
+                        };
+                    },
+                );
+                let mut uses = vec![
+                    read(&gbuffer.object),
+                    read(&gbuffer.emission),
+                    Use::buffer(&s.trained, Access::COMPUTE_READ),
+                    Use::buffer(&s.dispatch, Access::COMPUTE_READ_WRITE),
+                    Use::buffer(&s.tiles, Access::COMPUTE_WRITE),
+                ];
+                uses.extend(writes);
+                let push = ClassifyPush { objects: s.object_count, tile_capacity: s.tile_capacity };
+                let classify = Pass::new("network tile classification", uses, move |cmd| {
+                    s.classify.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
+                });
+                let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
+                uses.push(Use::buffer(&s.tiles, Access::COMPUTE_READ));
+                if s.tiled {
+                    uses.push(Use::buffer(&s.dispatch, Access::INDIRECT_READ));
+                }
+                uses.extend(writes);
+                let networks =
+                    Pass::new("network (specialization constants)", uses, move |cmd| s.record(ctx, cmd, extent, c));
+                let mut passes = vec![classify, networks];
+                if !s.dispatch_reset.is_empty() {
+                    passes.insert(0, reset);
+                }
+                passes
+            }
         }
     }
 
@@ -284,9 +412,7 @@ impl NetworkPass {
                 }
             }
         }
-        for image in [self.outputs.direct, self.outputs.indirect, self.outputs.gi] {
-            ctx.destroy_image(image);
-        }
+        self.outputs.destroy(ctx);
     }
 }
 
@@ -299,6 +425,26 @@ fn network_bindings<'a>(gbuffer: &'a GBufferTargets, buffer: &'a Buffer, outputs
         Bind::StorageImage(&gbuffer.object),
         Bind::StorageImage(&gbuffer.emission),
         Bind::StorageBuffer(buffer),
+        Bind::StorageImage(&outputs.direct),
+        Bind::StorageImage(&outputs.indirect),
+        Bind::StorageImage(&outputs.gi),
+    ]
+}
+
+/// The bindings of `network_classify.comp`.
+fn classify_bindings<'a>(
+    gbuffer: &'a GBufferTargets,
+    trained: &'a Buffer,
+    dispatch: &'a Buffer,
+    tiles: &'a Buffer,
+    outputs: &'a NetworkOutputs,
+) -> [Bind<'a>; 8] {
+    [
+        Bind::StorageImage(&gbuffer.object),
+        Bind::StorageImage(&gbuffer.emission),
+        Bind::StorageBuffer(trained),
+        Bind::StorageBuffer(dispatch),
+        Bind::StorageBuffer(tiles),
         Bind::StorageImage(&outputs.direct),
         Bind::StorageImage(&outputs.indirect),
         Bind::StorageImage(&outputs.gi),
@@ -336,6 +482,23 @@ fn storage(
     }
 }
 
+/// The tile lists of `objects` object ids at `extent`, and the tiles per object.
+fn tile_buffer(ctx: &Context, objects: usize, extent: vk::Extent2D) -> Result<(Buffer, u32)> {
+    let tile_capacity = extent.width.div_ceil(TILE) * extent.height.div_ceil(TILE);
+    let tiles_bytes = objects.max(1) as u64 * u64::from(tile_capacity) * 4;
+    let max = u64::from(ctx.info.limits.max_storage_buffer_range);
+    if tiles_bytes > max {
+        return Err(Error::Invalid(format!(
+            "tile lists of {objects} objects at {}x{} need {tiles_bytes} bytes, over maxStorageBufferRange {max}; \
+             render smaller or use --variant storage",
+            extent.width, extent.height
+        )));
+    }
+    let tiles =
+        ctx.create_buffer("network tiles", tiles_bytes, vk::BufferUsageFlags::STORAGE_BUFFER, MemoryLocation::GpuOnly)?;
+    Ok((tiles, tile_capacity))
+}
+
 fn specialized(
     ctx: &Context,
     shaders: &NetworkShaders,
@@ -350,19 +513,6 @@ fn specialized(
             objects.len()
         )));
     }
-    let extent = gbuffer.extent;
-    let tile_capacity = extent.width.div_ceil(TILE) * extent.height.div_ceil(TILE);
-    let tiles_bytes = objects.len().max(1) as u64 * u64::from(tile_capacity) * 4;
-    let max = u64::from(ctx.info.limits.max_storage_buffer_range);
-    if tiles_bytes > max {
-        return Err(Error::Invalid(format!(
-            "tile lists of {} objects at {}x{} need {tiles_bytes} bytes, over maxStorageBufferRange {max}; \
-             render smaller or use --variant storage",
-            objects.len(),
-            extent.width,
-            extent.height
-        )));
-    }
     let mut specializations = Vec::new();
     let mut trained_ids = Vec::new();
     for (id, object) in objects.iter().enumerate() {
@@ -375,9 +525,11 @@ fn specialized(
     let trained: Vec<u32> = objects.iter().map(|o| u32::from(o.is_some())).collect();
     let dispatch_reset: Vec<u32> = objects.iter().flat_map(|_| [0, 1, 1]).collect();
 
-    let mut buffers = Vec::new();
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+    let (tiles, tile_capacity) = tile_buffer(ctx, objects.len(), gbuffer.extent)?;
+    // Everything made so far, destroyed if a later step fails.
+    let mut buffers = vec![tiles];
     let made = (|| -> Result<(ComputePass, ComputePass)> {
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
         buffers.push(ctx.create_buffer_with_data("network trained objects", pad(&trained), storage)?);
         buffers.push(ctx.create_buffer(
             "network dispatch",
@@ -385,35 +537,21 @@ fn specialized(
             storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?);
-        buffers.push(ctx.create_buffer("network tiles", tiles_bytes, storage, MemoryLocation::GpuOnly)?);
-        let classify_bindings = [
-            Bind::StorageImage(&gbuffer.object),
-            Bind::StorageImage(&gbuffer.emission),
-            Bind::StorageBuffer(&buffers[0]),
-            Bind::StorageBuffer(&buffers[1]),
-            Bind::StorageBuffer(&buffers[2]),
-            Bind::StorageImage(&outputs.direct),
-            Bind::StorageImage(&outputs.indirect),
-            Bind::StorageImage(&outputs.gi),
-        ];
-        let push = std::mem::size_of::<ClassifyPush>() as u32;
+        let [tiles, trained, dispatch] = [&buffers[0], &buffers[1], &buffers[2]];
         let classify = ComputePass::new(
             ctx,
             "network tile classification",
             shaders.classify,
-            &classify_bindings,
-            push,
+            &classify_bindings(gbuffer, trained, dispatch, tiles, outputs),
+            std::mem::size_of::<ClassifyPush>() as u32,
             (TILE, TILE),
         )?;
-        let network_bindings = network_bindings(gbuffer, &buffers[2], outputs);
-        let push = std::mem::size_of::<SpecializedPush>() as u32;
-        let name = "network (specialization constants)";
         let networks = ComputePass::specialized(
             ctx,
-            name,
+            "network (specialization constants)",
             shaders.specialized,
-            &network_bindings,
-            push,
+            &network_bindings(gbuffer, tiles, outputs),
+            std::mem::size_of::<SpecializedPush>() as u32,
             (TILE, TILE),
             &specializations,
         );
@@ -427,19 +565,18 @@ fn specialized(
     })();
     match made {
         Ok((classify, networks)) => {
-            let tiles = buffers.pop().expect("three buffers");
-            let dispatch = buffers.pop().expect("three buffers");
-            let trained = buffers.pop().expect("three buffers");
+            let [tiles, trained, dispatch]: [Buffer; 3] = buffers.try_into().ok().expect("three buffers");
             Ok(Specialized {
                 classify,
                 networks,
                 objects: trained_ids,
                 object_count: objects.len() as u32,
-                tile_capacity,
+                tiled,
                 trained,
                 dispatch,
                 dispatch_reset,
                 tiles,
+                tile_capacity,
             })
         }
         Err(e) => {
@@ -458,37 +595,11 @@ fn pad(words: &[u32]) -> &[u8] {
 }
 
 impl Specialized {
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, tiled: bool, c: &NetworkConstants) {
-        let compute = vk::PipelineStageFlags::COMPUTE_SHADER;
-        let indirect = vk::PipelineStageFlags::DRAW_INDIRECT;
-        // The previous frame's classification and dispatches are done with the counters.
-        ctx.memory_barrier(
-            cmd,
-            (compute | indirect, vk::AccessFlags::empty()),
-            (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-        );
-        if !self.dispatch_reset.is_empty() {
-            // SAFETY: recording outside a render pass; at most 12 KiB (MAX_OBJECTS), under
-            // vkCmdUpdateBuffer's 64 KiB.
-            unsafe {
-                ctx.device.cmd_update_buffer(cmd, self.dispatch.raw, 0, bytemuck::cast_slice(&self.dispatch_reset))
-            };
-        }
-        ctx.memory_barrier(
-            cmd,
-            (vk::PipelineStageFlags::TRANSFER, vk::AccessFlags::TRANSFER_WRITE),
-            (compute, vk::AccessFlags::SHADER_READ | vk::AccessFlags::SHADER_WRITE),
-        );
-        let push = ClassifyPush { objects: self.object_count, tile_capacity: self.tile_capacity };
-        self.classify.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height);
-        ctx.memory_barrier(
-            cmd,
-            (compute, vk::AccessFlags::SHADER_WRITE),
-            (compute | indirect, vk::AccessFlags::SHADER_READ | vk::AccessFlags::INDIRECT_COMMAND_READ),
-        );
+    /// The per-object dispatches. Each writes only its own object's pixels of the outputs.
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, c: NetworkConstants) {
         let push = SpecializedPush { eye: c.eye, light: c.light, tile_capacity: self.tile_capacity, pad: [0; 3] };
         for (index, &id) in self.objects.iter().enumerate() {
-            let dispatch = if tiled {
+            let dispatch = if self.tiled {
                 Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * id as u64 }
             } else {
                 Dispatch::Covering { width: extent.width, height: extent.height }

@@ -9,6 +9,7 @@ use gpu_allocator::MemoryLocation;
 
 use crate::context::Context;
 use crate::error::{Error, Result, VkContext};
+use crate::sync::{Access, Pass, Use};
 
 pub struct Buffer {
     pub raw: vk::Buffer,
@@ -39,6 +40,10 @@ pub struct Image {
 }
 
 impl Image {
+    pub fn aspect(&self) -> vk::ImageAspectFlags {
+        aspect_of(self.format)
+    }
+
     pub fn pixel_count(&self) -> usize {
         self.extent.width as usize * self.extent.height as usize
     }
@@ -280,42 +285,70 @@ impl Context {
         result
     }
 
-    /// Reads an image (usage `TRANSFER_SRC`, currently in `layout`) back as floats, row-major,
-    /// all channels; the image is left in `layout`. 8-bit UNORM channels become `byte / 255`.
-    pub fn read_image(&self, image: &Image, layout: vk::ImageLayout) -> Result<Vec<f32>> {
+    /// A host-visible buffer the size of `image`'s pixels, for [`copy_to_buffer`] and
+    /// [`Context::decode`].
+    pub fn create_readback_buffer(&self, image: &Image) -> Result<Buffer> {
         let Some((channel, channels)) = Channel::of(image.format) else {
-            return Err(Error::Invalid(format!("read_image: format {:?} cannot be read back", image.format)));
+            return Err(Error::Invalid(format!("format {:?} cannot be read back", image.format)));
         };
         let size = (image.pixel_count() * channels * channel.bytes()) as u64;
-        let staging = self.create_buffer(
-            "read-back staging",
-            size,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
+        self.create_buffer("read-back staging", size, vk::BufferUsageFlags::TRANSFER_DST, MemoryLocation::GpuToCpu)
+    }
+
+    /// The pixels `copy_to_buffer` copied from an image of `format` into `buffer`, as floats,
+    /// row-major, all channels. 8-bit UNORM channels become `byte / 255`. Call it after the
+    /// copy's submission has finished.
+    pub fn decode(&self, format: vk::Format, buffer: &Buffer) -> Result<Vec<f32>> {
+        let Some((channel, _)) = Channel::of(format) else {
+            return Err(Error::Invalid(format!("format {format:?} cannot be read back")));
+        };
+        buffer
+            .mapped()
+            .map(|bytes| bytes.chunks_exact(channel.bytes()).map(|b| channel.decode(b)).collect())
+            .ok_or_else(|| Error::Invalid("read-back buffer is not host-visible".into()))
+    }
+
+    /// Reads an image (usage `TRANSFER_SRC`, currently in `layout`) back as floats, row-major,
+    /// all channels; the image is left in `layout`. For set-up and tests; frames read back
+    /// through [`copy_to_buffer`] passes.
+    pub fn read_image(&self, image: &Image, layout: vk::ImageLayout) -> Result<Vec<f32>> {
+        let staging = self.create_readback_buffer(image)?;
         let copied = self.submit_once(|cmd| {
             self.transition(cmd, image, layout, vk::ImageLayout::TRANSFER_SRC_OPTIMAL);
-            // SAFETY: the staging buffer is exactly the image's size.
-            unsafe {
-                self.device.cmd_copy_image_to_buffer(
-                    cmd,
-                    image.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    staging.raw,
-                    &[copy_region(image)],
-                )
-            };
+            copy_to_buffer(self, cmd, image, &staging);
             self.transition(cmd, image, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, layout);
         });
-        let values = copied.and_then(|()| {
-            staging
-                .mapped()
-                .map(|bytes| bytes.chunks_exact(channel.bytes()).map(|b| channel.decode(b)).collect())
-                .ok_or_else(|| Error::Invalid("read-back buffer is not host-visible".into()))
-        });
+        let values = copied.and_then(|()| self.decode(image.format, &staging));
         self.destroy_buffer(staging);
         values
     }
+}
+
+/// Records a copy of all of `image` (in `TRANSFER_SRC_OPTIMAL`) into `buffer`, which
+/// [`Context::create_readback_buffer`] made for it.
+pub fn copy_to_buffer(ctx: &Context, cmd: vk::CommandBuffer, image: &Image, buffer: &Buffer) {
+    // SAFETY: `cmd` is recording; the buffer holds exactly the image's texels.
+    unsafe {
+        ctx.device.cmd_copy_image_to_buffer(
+            cmd,
+            image.raw,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            buffer.raw,
+            &[copy_region(image)],
+        )
+    };
+}
+
+/// The passes that copy `image` into `buffer` and make the copy visible to the host, for a
+/// frame list.
+pub fn read_back_passes<'a>(ctx: &'a Context, image: &'a Image, buffer: &'a Buffer) -> [Pass<'a>; 2] {
+    let copy = Pass::new(
+        "read-back copy",
+        vec![Use::image(image, Access::TRANSFER_READ), Use::buffer(buffer, Access::TRANSFER_WRITE)],
+        move |cmd| copy_to_buffer(ctx, cmd, image, buffer),
+    );
+    let host = Pass::new("read-back to host", vec![Use::buffer(buffer, Access::HOST_READ)], |_| {});
+    [copy, host]
 }
 
 fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {

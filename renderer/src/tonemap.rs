@@ -6,6 +6,7 @@ use crate::compute::{Bind, ComputePass};
 use crate::context::Context;
 use crate::error::Result;
 use crate::resources::Image;
+use crate::sync::{Access, Pass, Use};
 
 /// ACES filmic curve, Narkowicz's fit.
 pub fn aces_fitted(x: f32) -> f32 {
@@ -37,6 +38,19 @@ impl TonemapPass {
         let bindings = [Bind::StorageImage(hdr), Bind::StorageImage(ldr)];
         let pass = ComputePass::new(ctx, "tonemap", spirv, &bindings, 4, (8, 8))?;
         Ok(Self { pass })
+    }
+
+    /// The pass for a frame list; `hdr` and `ldr` are the images it was made (or last
+    /// rebound) with.
+    pub fn pass<'a>(&'a self, ctx: &'a Context, hdr: &Image, ldr: &Image, exposure_scale: f32) -> Pass<'a> {
+        let uses = vec![Use::image(hdr, Access::COMPUTE_READ), Use::image(ldr, Access::COMPUTE_WRITE)];
+        let extent = ldr.extent;
+        Pass::new("tonemap", uses, move |cmd| self.record(ctx, cmd, extent, exposure_scale))
+    }
+
+    /// Points the pass at other images (after a resize); no frame that uses it may be pending.
+    pub fn rebind(&self, ctx: &Context, hdr: &Image, ldr: &Image) {
+        self.pass.rebind(ctx, &[Bind::StorageImage(hdr), Bind::StorageImage(ldr)]);
     }
 
     pub fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, exposure_scale: f32) {

@@ -3,18 +3,21 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{bail, Context as _, Result};
+use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
-use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::network::Component;
 use rrf_baker::scene::{Scene, View};
+use rrf_renderer::frames::{FrameLoop, FRAMES_IN_FLIGHT};
 use rrf_renderer::{vk, Context, ContextOptions, Validation};
 use serde_json::json;
 
 use super::bake::default_model_path;
 use super::variant::VariantArg;
-use crate::gpu_frame::{GpuFrame, TIMESTAMPS};
+use crate::gpu_frame::{FrameSettings, GpuFrame, Shown, TIMESTAMPS};
+
+/// Frames run before timing starts.
+const WARM_UP: u32 = 2;
 
 /// Multiply-adds of one 13 → 20 → 10 → 3 network: 13·20 + 20·10 + 10·3.
 const MULTIPLY_ADDS: f64 = 490.0;
@@ -83,10 +86,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let Some(period_ns) = ctx.info.limits.timestamp_period_ns else {
         bail!("{} cannot write timestamps on its queue", ctx.info.name);
     };
-    let pool_info = vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(TIMESTAMPS);
-    // SAFETY: a plain query pool, destroyed below.
-    let pool = unsafe { ctx.device.create_query_pool(&pool_info, None) }.context("vkCreateQueryPool")?;
-    let bench = Bench { ctx: &ctx, pool, period_ns: f64::from(period_ns), scene: &scene, model: &model, args };
+    let bench = Bench { ctx: &ctx, period_ns: f64::from(period_ns), scene: &scene, model: &model, args };
     let rows: Result<Vec<_>> = args
         .variant
         .0
@@ -97,8 +97,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             Ok(row)
         })
         .collect();
-    // SAFETY: no work is pending.
-    unsafe { ctx.device.destroy_query_pool(pool, None) };
     let report = ctx.finish();
     rows?;
     if !report.is_clean() {
@@ -109,7 +107,6 @@ pub fn run(args: &BenchArgs) -> Result<()> {
 
 struct Bench<'a> {
     ctx: &'a Context,
-    pool: vk::QueryPool,
     period_ns: f64,
     scene: &'a Scene,
     model: &'a Model,
@@ -122,38 +119,15 @@ impl Bench<'_> {
         let (ctx, scene, model, args) = (self.ctx, self.scene, self.model, self.args);
         let light = scene.moving_light.as_ref().map(|l| l.default_position).unwrap_or_default();
         let setup = Instant::now();
-        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, Vec3::ZERO)?;
+        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height })?;
         let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
-        let timed = (|| -> Result<_> {
-            let (mut gbuffer, mut network, mut tonemap, mut cpu) = (vec![], vec![], vec![], vec![]);
-            for i in 0..args.frames + 2 {
-                let start = Instant::now();
-                ctx.submit_once(|cmd| frame.record(ctx, cmd, view, light, 1.0, Some(self.pool)))?;
-                let cpu_ms = start.elapsed().as_secs_f64() * 1e3;
-                let mut stamps = [0u64; TIMESTAMPS as usize];
-                // SAFETY: the frame has finished; the pool holds TIMESTAMPS 64-bit results.
-                unsafe {
-                    ctx.device.get_query_pool_results(
-                        self.pool,
-                        0,
-                        &mut stamps,
-                        vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
-                    )
-                }
-                .context("vkGetQueryPoolResults")?;
-                if i < 2 {
-                    continue; // warm-up
-                }
-                let ms = |a: usize, b: usize| (stamps[b].wrapping_sub(stamps[a])) as f64 * self.period_ns * 1e-6;
-                gbuffer.push(ms(0, 1));
-                network.push(ms(1, 2));
-                tonemap.push(ms(2, 3));
-                cpu.push(cpu_ms);
-            }
-            Ok((gbuffer, network, tonemap, cpu, frame.read_objects(ctx)?))
-        })();
+        let settings = FrameSettings { view: view.clone(), light, exposure_scale: 1.0, shown: Shown::Gi };
+        let timed = self.time_frames(&frame, &settings);
+        let objects = timed.as_ref().ok().map(|_| frame.read_objects(ctx));
         frame.destroy(ctx);
-        let (gbuffer, network, tonemap, cpu, objects) = timed?;
+        let (passes, cpu) = timed?;
+        let objects = objects.expect("read after timing")?;
+        let [gbuffer, network, tonemap, _rest] = passes;
         // Networks evaluated per frame: two per pixel of an object that has them.
         let trained: Vec<bool> =
             scene.objects.iter().map(|o| model.network(&o.name, Component::Direct).is_some()).collect();
@@ -178,6 +152,44 @@ impl Bench<'_> {
             "network_gflops": gflops,
             "peak_fraction": args.peak_gflops.map(|p| gflops / p),
         }))
+    }
+}
+
+impl Bench<'_> {
+    /// Runs warm-up and timed frames with [`FRAMES_IN_FLIGHT`] in flight. Returns the GPU
+    /// milliseconds of each timed interval (`gpu_frame::TIMED_PASSES`) and the CPU milliseconds from
+    /// one frame's start to the next's, per timed frame.
+    fn time_frames(&self, frame: &GpuFrame, settings: &FrameSettings) -> Result<([Vec<f64>; 4], Vec<f64>)> {
+        let ctx = self.ctx;
+        let mut ring = FrameLoop::new(ctx, TIMESTAMPS)?;
+        let timed = (|| -> Result<_> {
+            let mut passes: [Vec<f64>; 4] = Default::default();
+            let mut cpu = Vec::new();
+            let mut last_start: Option<Instant> = None;
+            // The last FRAMES_IN_FLIGHT frames only deliver the timestamps of the ones before.
+            for i in 0..WARM_UP + self.args.frames + FRAMES_IN_FLIGHT as u32 {
+                let (handles, stamps) = ring.begin(ctx)?;
+                let now = Instant::now();
+                if let Some(last) = last_start.replace(now) {
+                    if (WARM_UP + 1..=WARM_UP + self.args.frames).contains(&i) {
+                        cpu.push((now - last).as_secs_f64() * 1e3);
+                    }
+                }
+                let stamped_frame = i.checked_sub(FRAMES_IN_FLIGHT as u32);
+                if let (Some(stamps), Some(f)) = (stamps, stamped_frame) {
+                    if f >= WARM_UP {
+                        for (k, times) in passes.iter_mut().enumerate() {
+                            times.push(stamps[k + 1].wrapping_sub(stamps[k]) as f64 * self.period_ns * 1e-6);
+                        }
+                    }
+                }
+                frame.record(ctx, handles.cmd, settings, None, Some(handles.queries), vec![]);
+                ring.submit(ctx, None, None, true)?;
+            }
+            Ok((passes, cpu))
+        })();
+        ring.destroy(ctx);
+        timed
     }
 }
 

@@ -20,7 +20,7 @@ use crate::eval::figure::{compose, Panel};
 use crate::eval::metrics::compare;
 use crate::eval::reference_cache::{default_cache_dir, reference};
 use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, ConfigReport, Report};
-use crate::gpu_frame::{rgb, GpuFrame};
+use crate::gpu_frame::{rgb, FrameSettings, GpuFrame, Shown};
 use crate::image_out::tonemap_rgb8;
 use crate::progress::Progress;
 
@@ -60,10 +60,18 @@ pub struct EvalArgs {
     pub output: PathBuf,
 }
 
-/// Makes the predictions: the Vulkan renderer, or the CPU inference.
+/// Makes the predictions: the Vulkan renderer (one frame for every configuration), or the
+/// CPU inference.
 enum Predictor {
-    Gpu(Box<Context>),
+    Gpu(Box<(Context, GpuFrame)>),
     Cpu,
+}
+
+/// The Vulkan context and the one frame every configuration renders with.
+fn gpu_predictor(scene: &Scene, model: &Model, width: u32, height: u32) -> Result<Box<(Context, GpuFrame)>> {
+    let ctx = Context::new(&ContextOptions::from_env())?;
+    let frame = GpuFrame::new(&ctx, scene, model, Variant::Tiled, vk::Extent2D { width, height })?;
+    Ok(Box::new((ctx, frame)))
 }
 
 pub fn run(args: &EvalArgs) -> Result<()> {
@@ -81,8 +89,8 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let predictor = if args.cpu {
         Predictor::Cpu
     } else {
-        match Context::new(&ContextOptions::from_env()) {
-            Ok(ctx) => Predictor::Gpu(Box::new(ctx)),
+        match gpu_predictor(&scene, &model, width, height) {
+            Ok(gpu) => Predictor::Gpu(gpu),
             Err(e) => {
                 eprintln!("warning: no Vulkan device ({e}); predicting with the CPU inference");
                 Predictor::Cpu
@@ -90,7 +98,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         }
     };
     let predictions = match &predictor {
-        Predictor::Gpu(ctx) => format!("{} (Vulkan, {} network pass)", ctx.info.name, Variant::Tiled.name()),
+        Predictor::Gpu(gpu) => format!("{} (Vulkan, {} network pass)", gpu.0.info.name, Variant::Tiled.name()),
         Predictor::Cpu => "the CPU reference inference".to_string(),
     };
     let cache = args.cache.clone().unwrap_or_else(|| default_cache_dir(&scene));
@@ -139,8 +147,10 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             })
         })
         .collect();
-    if let Predictor::Gpu(ctx) = predictor {
-        let report = (*ctx).finish();
+    if let Predictor::Gpu(gpu) = predictor {
+        let (ctx, frame) = *gpu;
+        frame.destroy(&ctx);
+        let report = ctx.finish();
         if !report.is_clean() {
             bail!("Vulkan reported {} validation messages; leaked {:?}", report.validation_messages, report.leaked);
         }
@@ -197,13 +207,11 @@ fn predict(
                 gi: image.component(|r| r.gi()),
             })
         }
-        Predictor::Gpu(ctx) => {
-            let default_light = scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position);
-            let extent = vk::Extent2D { width, height };
-            let frame = GpuFrame::new(ctx, scene, model, Variant::Tiled, extent, config.light - default_light)?;
-            let pixels = frame.render(ctx, &config.view, config.light);
-            frame.destroy(ctx);
-            let pixels = pixels?;
+        Predictor::Gpu(gpu) => {
+            let (ctx, frame) = &**gpu;
+            let settings =
+                FrameSettings { view: config.view.clone(), light: config.light, exposure_scale: 1.0, shown: Shown::Gi };
+            let pixels = frame.render(ctx, &settings)?;
             Ok(Predicted { direct: rgb(&pixels.direct), indirect: rgb(&pixels.indirect), gi: rgb(&pixels.gi) })
         }
     }

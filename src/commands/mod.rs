@@ -7,4 +7,5 @@ pub mod info;
 pub mod reference;
 pub mod render;
 pub mod variant;
+pub mod view;
 pub mod view_args;

@@ -1,0 +1,207 @@
+//! Frames in flight: per-frame command buffers, fences, semaphores, timestamp queries and a
+//! deletion queue, so that the CPU records frame N+1 while the GPU runs frame N.
+
+use ash::vk;
+
+use crate::context::Context;
+use crate::error::{Result, VkContext};
+
+/// Frames the CPU may record ahead of the GPU.
+pub const FRAMES_IN_FLIGHT: usize = 2;
+
+/// Work to do once the frame that last used something has finished on the GPU.
+pub type Deletion = Box<dyn FnOnce(&Context)>;
+
+/// The handles a frame records and submits with.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameHandles {
+    pub cmd: vk::CommandBuffer,
+    /// Signalled when the swapchain image the frame draws to is ready.
+    pub image_available: vk::Semaphore,
+    /// The frame's timestamp queries, reset at the start of its command buffer.
+    pub queries: vk::QueryPool,
+}
+
+/// One frame's own objects.
+struct FrameSlot {
+    cmd: vk::CommandBuffer,
+    /// Signalled when the frame's commands have finished.
+    fence: vk::Fence,
+    image_available: vk::Semaphore,
+    queries: vk::QueryPool,
+    /// Whether the slot's last frame wrote timestamps that have not been read.
+    stamped: bool,
+    deletions: Vec<Deletion>,
+}
+
+/// A ring of [`FRAMES_IN_FLIGHT`] frame slots.
+pub struct FrameLoop {
+    pool: vk::CommandPool,
+    slots: Vec<FrameSlot>,
+    current: usize,
+    timestamps: u32,
+    /// Frames begun so far.
+    pub frame: u64,
+}
+
+impl FrameLoop {
+    /// A ring whose frames write up to `timestamps` timestamp queries each.
+    pub fn new(ctx: &Context, timestamps: u32) -> Result<Self> {
+        let device = &ctx.device;
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(ctx.queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: valid create info; the pool is destroyed in `destroy` (or below on failure).
+        let pool = unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+        let mut ring = FrameLoop { pool, slots: Vec::new(), current: 0, timestamps: timestamps.max(1), frame: 0 };
+        for i in 0..FRAMES_IN_FLIGHT {
+            match ring.make_slot(ctx, i) {
+                Ok(slot) => ring.slots.push(slot),
+                Err(e) => {
+                    ring.destroy(ctx);
+                    return Err(e);
+                }
+            }
+        }
+        Ok(ring)
+    }
+
+    fn make_slot(&self, ctx: &Context, index: usize) -> Result<FrameSlot> {
+        let device = &ctx.device;
+        let alloc = vk::CommandBufferAllocateInfo::default()
+            .command_pool(self.pool)
+            .level(vk::CommandBufferLevel::PRIMARY)
+            .command_buffer_count(1);
+        // SAFETY: valid create infos; what is made is destroyed in `destroy`, or here if a
+        // later step fails.
+        unsafe {
+            let cmd = device.allocate_command_buffers(&alloc).vk("vkAllocateCommandBuffers")?[0];
+            // Signalled, so that the first wait on a fresh slot returns at once.
+            let fence = device
+                .create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None)
+                .vk("vkCreateFence")?;
+            let semaphore = match device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) {
+                Ok(s) => s,
+                Err(e) => {
+                    device.destroy_fence(fence, None);
+                    return Err(e).vk("vkCreateSemaphore");
+                }
+            };
+            let query_info =
+                vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(self.timestamps);
+            let queries = match device.create_query_pool(&query_info, None) {
+                Ok(q) => q,
+                Err(e) => {
+                    device.destroy_fence(fence, None);
+                    device.destroy_semaphore(semaphore, None);
+                    return Err(e).vk("vkCreateQueryPool");
+                }
+            };
+            ctx.set_name(cmd, &format!("frame {index} commands"));
+            ctx.set_name(fence, &format!("frame {index} done"));
+            ctx.set_name(semaphore, &format!("frame {index} image available"));
+            Ok(FrameSlot { cmd, fence, image_available: semaphore, queries, stamped: false, deletions: Vec::new() })
+        }
+    }
+
+    /// Waits until the next slot's previous frame has finished, runs its deletions, and
+    /// begins its command buffer with its timestamp queries reset. Returns the slot and, if
+    /// its previous frame wrote timestamps, their values (in ticks).
+    pub fn begin(&mut self, ctx: &Context) -> Result<(FrameHandles, Option<Vec<u64>>)> {
+        self.current = (self.frame % FRAMES_IN_FLIGHT as u64) as usize;
+        self.frame += 1;
+        let timestamps = self.timestamps;
+        let slot = &mut self.slots[self.current];
+        let device = &ctx.device;
+        // SAFETY: the fence, command buffer and query pool belong to this slot; once the fence
+        // is signalled, nothing of the slot's previous frame is pending.
+        unsafe {
+            device.wait_for_fences(&[slot.fence], true, u64::MAX).vk("vkWaitForFences")?;
+            for deletion in slot.deletions.drain(..) {
+                deletion(ctx);
+            }
+            let stamps = if slot.stamped {
+                let mut values = vec![0u64; timestamps as usize];
+                device
+                    .get_query_pool_results(slot.queries, 0, &mut values, vk::QueryResultFlags::TYPE_64)
+                    .vk("vkGetQueryPoolResults")?;
+                slot.stamped = false;
+                Some(values)
+            } else {
+                None
+            };
+            device.reset_command_buffer(slot.cmd, vk::CommandBufferResetFlags::empty()).vk("vkResetCommandBuffer")?;
+            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            device.begin_command_buffer(slot.cmd, &begin).vk("vkBeginCommandBuffer")?;
+            device.cmd_reset_query_pool(slot.cmd, slot.queries, 0, timestamps);
+            let handles = FrameHandles { cmd: slot.cmd, image_available: slot.image_available, queries: slot.queries };
+            Ok((handles, stamps))
+        }
+    }
+
+    /// Ends the current frame's command buffer and submits it; it waits for `wait` (at the
+    /// transfer stage, where the swapchain image is first written) and signals `signal`.
+    /// `stamped`: whether the frame wrote all its timestamps.
+    pub fn submit(
+        &mut self,
+        ctx: &Context,
+        wait: Option<vk::Semaphore>,
+        signal: Option<vk::Semaphore>,
+        stamped: bool,
+    ) -> Result<()> {
+        let slot = &mut self.slots[self.current];
+        let device = &ctx.device;
+        let cmds = [slot.cmd];
+        let waits: Vec<vk::Semaphore> = wait.into_iter().collect();
+        let stages = vec![vk::PipelineStageFlags::TRANSFER; waits.len()];
+        let signals: Vec<vk::Semaphore> = signal.into_iter().collect();
+        let submit = vk::SubmitInfo::default()
+            .command_buffers(&cmds)
+            .wait_semaphores(&waits)
+            .wait_dst_stage_mask(&stages)
+            .signal_semaphores(&signals);
+        // SAFETY: the command buffer is recording and is ended here; the fence is unsignalled
+        // only between reset and submit, and both happen here.
+        unsafe {
+            device.end_command_buffer(slot.cmd).vk("vkEndCommandBuffer")?;
+            device.reset_fences(&[slot.fence]).vk("vkResetFences")?;
+            device.queue_submit(ctx.queue, &[submit], slot.fence).vk("vkQueueSubmit")?;
+        }
+        slot.stamped = stamped;
+        Ok(())
+    }
+
+    /// Runs `deletion` once the current frame has finished on the GPU.
+    pub fn defer(&mut self, deletion: Deletion) {
+        self.slots[self.current].deletions.push(deletion);
+    }
+
+    /// Waits for every frame in flight and runs every pending deletion.
+    pub fn wait_all(&mut self, ctx: &Context) -> Result<()> {
+        let fences: Vec<vk::Fence> = self.slots.iter().map(|s| s.fence).collect();
+        if !fences.is_empty() {
+            // SAFETY: the fences belong to this ring.
+            unsafe { ctx.device.wait_for_fences(&fences, true, u64::MAX) }.vk("vkWaitForFences")?;
+        }
+        for slot in &mut self.slots {
+            for deletion in slot.deletions.drain(..) {
+                deletion(ctx);
+            }
+        }
+        Ok(())
+    }
+
+    /// Waits for all frames, runs the deletions and destroys the ring.
+    pub fn destroy(mut self, ctx: &Context) {
+        let _ = self.wait_all(ctx);
+        // SAFETY: no frame of the ring is pending any more.
+        unsafe {
+            for slot in self.slots.drain(..) {
+                ctx.device.destroy_fence(slot.fence, None);
+                ctx.device.destroy_semaphore(slot.image_available, None);
+                ctx.device.destroy_query_pool(slot.queries, None);
+            }
+            ctx.device.destroy_command_pool(self.pool, None);
+        }
+    }
+}

@@ -1,0 +1,185 @@
+//! `rrf view`: the interactive walkthrough, or a scripted run of it.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context as _, Result};
+use clap::{Args, ValueEnum};
+use rrf_baker::model::Model;
+use rrf_baker::scene::Scene;
+use rrf_renderer::{swapchain, vk, Context, ContextOptions};
+
+use super::bake::default_model_path;
+use super::variant::VariantArg;
+use super::view_args::{named_view, parse_size, parse_vec3};
+use crate::viewer::renderer::Renderer;
+use crate::viewer::script::Script;
+use crate::viewer::state::ViewerState;
+use crate::viewer::{run_headless, window, RunPlan, Session};
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PresentMode {
+    /// Wait for vertical blank; no tearing (the default, offered everywhere).
+    Fifo,
+    /// Show the newest frame at vertical blank, replacing queued ones; no tearing.
+    Mailbox,
+    /// Show frames at once; may tear. For measuring frame rates above the display's.
+    Immediate,
+}
+
+impl PresentMode {
+    fn vk(self) -> vk::PresentModeKHR {
+        match self {
+            PresentMode::Fifo => vk::PresentModeKHR::FIFO,
+            PresentMode::Mailbox => vk::PresentModeKHR::MAILBOX,
+            PresentMode::Immediate => vk::PresentModeKHR::IMMEDIATE,
+        }
+    }
+}
+
+#[derive(Args, Debug)]
+#[command(after_long_help = CONTROLS)]
+pub struct ViewArgs {
+    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    pub scene: PathBuf,
+    /// Model file; default: model.safetensors in the scene's folder.
+    #[arg(long)]
+    pub model: Option<PathBuf>,
+    /// A named view to start from (see `rrf info SCENE`); default: the glTF camera.
+    #[arg(long)]
+    pub view: Option<String>,
+    /// Where the moving light starts, x,y,z in metres; default: where the glTF puts it.
+    #[arg(long, value_name = "X,Y,Z")]
+    pub light: Option<String>,
+    /// Window size (or frame size when headless) in pixels.
+    #[arg(long, default_value = "960x540", value_name = "WxH")]
+    pub size: String,
+    /// How the networks reach the shader (see `rrf render --help`).
+    #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
+    pub variant: VariantArg,
+    /// Presentation mode; falls back to fifo where the display does not offer it.
+    #[arg(long, value_enum, default_value_t = PresentMode::Fifo)]
+    pub present_mode: PresentMode,
+    /// Run this many frames, then exit (script time: 1/60 s per frame).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..=100_000_000))]
+    pub frames: Option<u64>,
+    /// Save the last frame to this PNG (with --frames or --script, or when headless).
+    #[arg(long, value_name = "FILE.png")]
+    pub screenshot: Option<PathBuf>,
+    /// Play a script of timed events (format below), then exit.
+    #[arg(long, value_name = "FILE")]
+    pub script: Option<PathBuf>,
+    /// At exit, print frames, median and 99th-percentile frame time, GPU milliseconds per pass
+    /// and peak memory, as one line of JSON on stdout.
+    #[arg(long)]
+    pub stats: bool,
+    /// Start with the overlay hidden (O toggles it).
+    #[arg(long)]
+    pub no_overlay: bool,
+    /// Render without a window even when a display is available.
+    #[arg(long)]
+    pub headless: bool,
+}
+
+const CONTROLS: &str = "\
+Controls (H shows them in the window):
+  W A S D  move           Q E  down, up         Shift  faster      wheel  speed
+  right mouse button held: look around
+  arrows, Page Up/Down: move the light, kept inside the box the model was trained for
+  1 2 3: global, direct only, indirect only     [ ]: exposure
+  P: screenshot (the path is printed)   R: reset view and light   O: overlay   H: help   Esc: quit
+
+Script format (--script): one event per line, TIME COMMAND ARGUMENTS, TIME in seconds of script
+time, which advances by 1/60 s per frame whatever the frame rate; # starts a comment.
+  camera X,Y,Z X,Y,Z [over S]    eye and target; with `over`, move there in S seconds
+  light X,Y,Z [over S]           the moving light (kept inside its trained box)
+  component gi|direct|indirect   which light is shown
+  exposure EV                    exposure in stops
+  resize WxH                     window (or headless frame) size in pixels
+  screenshot FILE.png            save the frame as shown
+  overlay on|off                 show or hide the overlay
+  quit                           end here (otherwise one frame after the last event)
+scenes/NAME/demo.txt is a demo script for each shipped scene.
+
+Without a display (no DISPLAY or WAYLAND_DISPLAY), or with --headless, frames are rendered
+without a window; with neither --frames nor --script, one frame is saved to --screenshot
+(default view.png).";
+
+pub fn run(args: &ViewArgs) -> Result<()> {
+    let size = parse_size(&args.size)?;
+    let script = args.script.as_deref().map(Script::load).transpose()?;
+    if let Some(path) = &args.screenshot {
+        if !path.to_string_lossy().to_ascii_lowercase().ends_with(".png") {
+            bail!("--screenshot {}: the file must end in .png", path.display());
+        }
+    }
+    let scene = Scene::load(&args.scene)?;
+    let model_path = args.model.clone().unwrap_or_else(|| default_model_path(&scene));
+    let model = Model::load(&model_path, Some(&scene))?;
+    for u in &model.metadata.untrained {
+        eprintln!("warning: {} has no network ({}); it renders black", u.object, u.reason);
+    }
+    let view = named_view(&scene, args.view.as_deref())?;
+    let default_light = scene.moving_light.as_ref().map_or(Default::default(), |l| l.default_position);
+    let light = match &args.light {
+        Some(text) => parse_vec3(text, "--light")?,
+        None => default_light,
+    };
+    let mut state = ViewerState::new(&scene, view, light);
+    state.overlay = !args.no_overlay;
+    let mut plan = RunPlan { script, frames: args.frames, screenshot: args.screenshot.clone() };
+
+    let no_display = std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none();
+    let event_loop = if args.headless || no_display {
+        None
+    } else {
+        match window::event_loop() {
+            Ok(event_loop) => Some(event_loop),
+            Err(e) => {
+                eprintln!("warning: {e:#}");
+                None
+            }
+        }
+    };
+    if event_loop.is_none() && !args.headless {
+        eprintln!(
+            "no display to open a window on (DISPLAY and WAYLAND_DISPLAY are unset or unusable); rendering headless"
+        );
+    }
+    if event_loop.is_none() && !plan.scripted() {
+        plan.frames = Some(1);
+        plan.screenshot.get_or_insert_with(|| PathBuf::from("view.png"));
+    }
+
+    let mut options = ContextOptions::from_env();
+    if let Some(event_loop) = &event_loop {
+        options.instance_extensions = window::instance_extensions(event_loop)?;
+        options.device_extensions = swapchain::DEVICE_EXTENSIONS.to_vec();
+    }
+    let ctx = Context::new(&options).context("cannot start Vulkan (`rrf info` says more)")?;
+    let extent = vk::Extent2D { width: size.0, height: size.1 };
+    let started = std::time::Instant::now();
+    let mut renderer = Renderer::new(ctx, &scene, &model, args.variant.0, extent)?;
+    eprintln!(
+        "{} on {} ({} network pass, pipelines ready in {:.1} s)",
+        scene.name,
+        renderer.ctx.info.name,
+        args.variant.0.name(),
+        started.elapsed().as_secs_f64()
+    );
+    let mut session = Session::new(state, plan);
+    let ran = match event_loop {
+        Some(event_loop) => {
+            let title = format!("rrf view: {}", scene.name);
+            window::run(event_loop, &mut renderer, &mut session, title, size, args.present_mode.vk())
+        }
+        None => run_headless(&mut renderer, &mut session),
+    };
+    let summary = session.summary();
+    let finished = renderer.finish();
+    ran?;
+    finished?;
+    if args.stats {
+        println!("{summary}");
+    }
+    Ok(())
+}

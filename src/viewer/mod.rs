@@ -1,0 +1,156 @@
+//! `rrf view`: the interactive walkthrough, in a window (winit) or headless, driven by the
+//! keyboard and mouse or by a script.
+
+pub mod renderer;
+pub mod script;
+pub mod state;
+pub mod stats;
+pub mod window;
+
+use std::collections::HashSet;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Result;
+
+use renderer::{Presenter, Renderer};
+use script::{Action, Script, FRAME_SECONDS};
+use state::{Held, ViewerState};
+use stats::Stats;
+
+/// How a run ends and what it saves.
+#[derive(Clone, Debug, Default)]
+pub struct RunPlan {
+    /// Events to play; none for an interactive run.
+    pub script: Option<Script>,
+    /// Frames to run; `None`: until the window closes (or the script ends).
+    pub frames: Option<u64>,
+    /// Where to save the last frame.
+    pub screenshot: Option<PathBuf>,
+}
+
+impl RunPlan {
+    /// Whether time is script time (a fixed step per frame) rather than the wall clock, and
+    /// the run ends by itself.
+    pub fn scripted(&self) -> bool {
+        self.script.is_some() || self.frames.is_some()
+    }
+
+    /// The frames the run lasts, if it ends by itself.
+    fn last_frame(&self) -> Option<u64> {
+        match (&self.script, self.frames) {
+            (_, Some(n)) => Some(n),
+            (Some(s), None) => Some(s.frames()),
+            (None, None) => None,
+        }
+    }
+}
+
+/// What the session wants the window to do after a frame.
+#[derive(Debug, Default)]
+pub struct Requests {
+    pub resize: Option<(u32, u32)>,
+    pub quit: bool,
+}
+
+/// A viewer run, apart from the window: the state, input, script and statistics, and the
+/// frame counter.
+pub struct Session {
+    pub state: ViewerState,
+    pub stats: Stats,
+    pub held: HashSet<Held>,
+    plan: RunPlan,
+    /// Frames drawn so far.
+    pub frame: u64,
+    last_tick: Option<Instant>,
+    /// A screenshot asked for by a key, taken with the next frame.
+    pending_screenshot: Option<PathBuf>,
+    screenshots_taken: u32,
+}
+
+impl Session {
+    pub fn new(state: ViewerState, plan: RunPlan) -> Self {
+        Session {
+            state,
+            stats: Stats::default(),
+            held: HashSet::new(),
+            plan,
+            frame: 0,
+            last_tick: None,
+            pending_screenshot: None,
+            screenshots_taken: 0,
+        }
+    }
+
+    /// Asks for a screenshot with the next frame, to a new numbered file in the current
+    /// folder.
+    pub fn screenshot_key(&mut self) {
+        self.screenshots_taken += 1;
+        self.pending_screenshot = Some(PathBuf::from(format!("rrf-screenshot-{:03}.png", self.screenshots_taken)));
+    }
+
+    /// Advances time, plays the frame's script events, and draws it. Returns what the window
+    /// should do next.
+    pub fn step(
+        &mut self,
+        renderer: &mut Renderer,
+        presenter: Option<&mut Presenter>,
+        overlay_scale: u32,
+    ) -> Result<Requests> {
+        let mut requests = Requests::default();
+        let (dt, t) = if self.plan.scripted() {
+            (FRAME_SECONDS, self.frame as f64 * FRAME_SECONDS)
+        } else {
+            let now = Instant::now();
+            let dt = self.last_tick.replace(now).map_or(0.0, |last| (now - last).as_secs_f64().min(0.25));
+            (dt, self.frame as f64 * FRAME_SECONDS)
+        };
+        let mut screenshot = self.pending_screenshot.take();
+        if let Some(script) = &self.plan.script {
+            for event in script.due(self.frame) {
+                match &event.action {
+                    Action::Resize(w, h) => requests.resize = Some((*w, *h)),
+                    Action::Screenshot(path) => screenshot = Some(path.clone()),
+                    Action::Quit => requests.quit = true,
+                    action => self.state.apply(action, t),
+                }
+            }
+        }
+        self.state.update(&self.held, dt as f32, t);
+        let last = self.plan.last_frame().is_some_and(|n| self.frame + 1 >= n);
+        if last && self.plan.screenshot.is_some() {
+            screenshot = self.plan.screenshot.clone();
+        }
+        renderer.draw(&self.state, &mut self.stats, presenter, overlay_scale, screenshot)?;
+        self.frame += 1;
+        report_saved(renderer)?;
+        requests.quit |= last;
+        Ok(requests)
+    }
+
+    /// The `--stats` summary.
+    pub fn summary(&self) -> serde_json::Value {
+        self.stats.summary(self.frame)
+    }
+}
+
+/// Prints the screenshots written since the last call; fails on one that could not be.
+pub fn report_saved(renderer: &Renderer) -> Result<()> {
+    for saved in renderer.take_saved() {
+        eprintln!("saved screenshot {}", saved?.display());
+    }
+    Ok(())
+}
+
+/// Runs a session without a window: frames go to the display image only (screenshots read it).
+pub fn run_headless(renderer: &mut Renderer, session: &mut Session) -> Result<()> {
+    loop {
+        let requests = session.step(renderer, None, 1)?;
+        if let Some((w, h)) = requests.resize {
+            renderer.resize(rrf_renderer::vk::Extent2D { width: w, height: h })?;
+        }
+        if requests.quit {
+            return Ok(());
+        }
+    }
+}

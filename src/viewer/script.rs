@@ -1,0 +1,200 @@
+//! Scripts of timed viewer events, for tests, demos and benchmarks.
+//!
+//! One event per line: `TIME COMMAND ARGUMENTS`, with TIME in seconds of script time. Script
+//! time advances by exactly 1/60 s per frame, whatever the frame rate, so that a script gives
+//! the same frames on every machine. `#` starts a comment. Commands:
+//!
+//! | command | effect |
+//! |---|---|
+//! | `camera X,Y,Z X,Y,Z [over S]` | eye and target; with `over`, moves there linearly in S seconds |
+//! | `light X,Y,Z [over S]` | the moving light's position (kept inside its trained box) |
+//! | `component gi\|direct\|indirect` | which light is shown |
+//! | `exposure EV` | exposure in stops |
+//! | `resize WxH` | the frame (and window) size in pixels |
+//! | `screenshot FILE.png` | saves the frame as shown, overlay included (unless `--no-overlay`) |
+//! | `overlay on\|off` | shows or hides the overlay |
+//! | `quit` | ends the run (otherwise it ends one frame after the last event) |
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use rrf_baker::glam::Vec3;
+
+use crate::commands::view_args::{parse_size, parse_vec3};
+use crate::gpu_frame::Shown;
+
+/// Script time per frame.
+pub const FRAME_SECONDS: f64 = 1.0 / 60.0;
+
+#[derive(Clone, Debug, PartialEq)]
+pub enum Action {
+    Camera { eye: Vec3, target: Vec3, over: f64 },
+    Light { position: Vec3, over: f64 },
+    Component(Shown),
+    Exposure(f32),
+    Resize(u32, u32),
+    Screenshot(PathBuf),
+    Overlay(bool),
+    Quit,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Event {
+    pub time: f64,
+    pub action: Action,
+}
+
+/// A parsed script, events in time order (stable for equal times).
+#[derive(Clone, Debug, Default)]
+pub struct Script {
+    pub events: Vec<Event>,
+}
+
+impl Script {
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).with_context(|| format!("cannot read script {}", path.display()))?;
+        Self::parse(&text).with_context(|| format!("script {}", path.display()))
+    }
+
+    pub fn parse(text: &str) -> Result<Self> {
+        let mut events = Vec::new();
+        for (number, line) in text.lines().enumerate() {
+            let line = line.split('#').next().unwrap_or("").trim();
+            if line.is_empty() {
+                continue;
+            }
+            let event = parse_line(line).with_context(|| format!("line {}: {line:?}", number + 1))?;
+            events.push(event);
+        }
+        events.sort_by(|a, b| a.time.total_cmp(&b.time));
+        Ok(Script { events })
+    }
+
+    /// The frames the script runs: until its last event, plus one frame to show it.
+    pub fn frames(&self) -> u64 {
+        let end = self.events.last().map_or(0.0, |e| e.time);
+        (end / FRAME_SECONDS).ceil() as u64 + 1
+    }
+
+    /// The events due in the frame at script time `t` (those in `[t, t + FRAME_SECONDS)`).
+    pub fn due(&self, frame: u64) -> impl Iterator<Item = &Event> {
+        let (start, end) = (frame as f64 * FRAME_SECONDS, (frame + 1) as f64 * FRAME_SECONDS);
+        // A small tolerance so that "1.0" falls in frame 60, not 59, despite rounding.
+        let eps = 1e-9;
+        self.events.iter().filter(move |e| e.time >= start - eps && e.time < end - eps)
+    }
+}
+
+fn parse_line(line: &str) -> Result<Event> {
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let [time, command, args @ ..] = words.as_slice() else { bail!("expected TIME COMMAND [ARGUMENTS]") };
+    let time: f64 = time.parse().with_context(|| format!("time {time:?} is not a number of seconds"))?;
+    if !(time.is_finite() && time >= 0.0) {
+        bail!("time {time} must be a finite number of seconds, 0 or more");
+    }
+    // `... over S` on the commands that move things.
+    let over = |args: &[&str]| -> Result<f64> {
+        match args {
+            [] => Ok(0.0),
+            ["over", s] => match s.parse::<f64>() {
+                Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+                _ => bail!("over {s:?}: expected a duration in seconds, 0 or more"),
+            },
+            _ => bail!("unexpected {:?}; expected nothing or `over SECONDS`", args.join(" ")),
+        }
+    };
+    let action = match (*command, args) {
+        ("camera", [eye, target, rest @ ..]) => {
+            let eye = parse_vec3(eye, "camera eye")?;
+            let target = parse_vec3(target, "camera target")?;
+            if eye.distance(target) < 1e-6 {
+                bail!("camera: eye and target are the same point");
+            }
+            Action::Camera { eye, target, over: over(rest)? }
+        }
+        ("light", [position, rest @ ..]) => {
+            Action::Light { position: parse_vec3(position, "light")?, over: over(rest)? }
+        }
+        ("component", [name]) => Action::Component(match *name {
+            "gi" => Shown::Gi,
+            "direct" => Shown::Direct,
+            "indirect" => Shown::Indirect,
+            _ => bail!("component {name:?}: expected gi, direct or indirect"),
+        }),
+        ("exposure", [ev]) => match ev.parse::<f32>() {
+            Ok(v) if v.is_finite() && v.abs() <= 20.0 => Action::Exposure(v),
+            _ => bail!("exposure {ev:?}: expected stops between -20 and 20"),
+        },
+        ("resize", [size]) => {
+            let (w, h) = parse_size(size)?;
+            Action::Resize(w, h)
+        }
+        ("screenshot", [file]) => {
+            if !file.to_ascii_lowercase().ends_with(".png") {
+                bail!("screenshot {file:?}: the file must end in .png");
+            }
+            Action::Screenshot(PathBuf::from(file))
+        }
+        ("overlay", ["on"]) => Action::Overlay(true),
+        ("overlay", ["off"]) => Action::Overlay(false),
+        ("quit", []) => Action::Quit,
+        (c @ ("camera" | "light" | "component" | "exposure" | "resize" | "screenshot" | "overlay" | "quit"), _) => {
+            bail!("wrong arguments for {c}; see `rrf view --help`")
+        }
+        (c, _) => bail!(
+            "unknown command {c:?}; expected camera, light, component, exposure, resize, screenshot, overlay or quit"
+        ),
+    };
+    Ok(Event { time, action })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_every_command_in_time_order() {
+        let script = Script::parse(
+            "# demo\n\
+             2.0 screenshot out.png\n\
+             0 camera 0,1,2 0,1,0 over 1.5   # move\n\
+             0.5 light 0.1,0.2,0.3\n\
+             1 component direct\n\
+             1 exposure -1.5\n\
+             1.5 resize 320x200\n\
+             1.5 overlay off\n\
+             2.5 quit\n",
+        )
+        .unwrap();
+        let actions: Vec<&Action> = script.events.iter().map(|e| &e.action).collect();
+        assert_eq!(
+            actions[0],
+            &Action::Camera { eye: Vec3::new(0.0, 1.0, 2.0), target: Vec3::new(0.0, 1.0, 0.0), over: 1.5 }
+        );
+        assert_eq!(actions[2], &Action::Component(Shown::Direct));
+        assert_eq!(actions[4], &Action::Resize(320, 200));
+        assert_eq!(actions[7], &Action::Quit);
+        assert_eq!(script.frames(), 151);
+        assert_eq!(script.due(60).count(), 2, "both events at t = 1 fall in frame 60");
+        assert_eq!(script.due(59).count(), 0);
+    }
+
+    #[test]
+    fn errors_name_the_line_and_the_problem() {
+        for (text, needle) in [
+            ("0 fly 1,2,3", "unknown command"),
+            ("x camera 0,0,0 1,1,1", "not a number"),
+            ("-1 quit", "0 or more"),
+            ("0 camera 1,1,1 1,1,1", "same point"),
+            ("0 light 1,2", "x,y,z"),
+            ("0 light 1,2,3 over -1", "over"),
+            ("0 component all", "gi, direct or indirect"),
+            ("0 resize 0x10", "WxH"),
+            ("0 screenshot a.jpg", ".png"),
+            ("0 quit now", "wrong arguments"),
+        ] {
+            let e = format!("{:#}", Script::parse(&format!("# c\n{text}")).unwrap_err());
+            assert!(e.contains("line 2") && e.contains(needle), "{text:?} gave {e:?}");
+        }
+    }
+}

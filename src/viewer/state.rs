@@ -1,0 +1,317 @@
+//! What the viewer shows and how input and scripts change it, apart from any window: the fly
+//! camera, the light inside its trained box, the component, the exposure, and the overlay text.
+
+use rrf_baker::glam::Vec3;
+use rrf_baker::scene::{Aabb, Scene, View};
+use rrf_renderer::overlay::{Colour, TextGrid};
+
+use super::script::Action;
+use super::stats::Stats;
+use crate::gpu_frame::{FrameSettings, Shown, TIMED_PASSES};
+
+/// Keys that act for as long as they are held.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Held {
+    Forward,
+    Back,
+    Left,
+    Right,
+    Down,
+    Up,
+    Fast,
+    LightLeft,
+    LightRight,
+    LightForward,
+    LightBack,
+    LightDown,
+    LightUp,
+}
+
+/// A linear move of two points over a span of time.
+#[derive(Clone, Copy, Debug)]
+struct Tween {
+    from: [Vec3; 2],
+    to: [Vec3; 2],
+    start: f64,
+    seconds: f64,
+}
+
+impl Tween {
+    fn at(&self, t: f64) -> ([Vec3; 2], bool) {
+        let s = if self.seconds > 0.0 { ((t - self.start) / self.seconds).clamp(0.0, 1.0) } else { 1.0 } as f32;
+        ([self.from[0].lerp(self.to[0], s), self.from[1].lerp(self.to[1], s)], s >= 1.0)
+    }
+}
+
+pub struct ViewerState {
+    pub scene_name: String,
+    /// The view the viewer starts from and `R` returns to.
+    home: View,
+    home_light: Vec3,
+    pub eye: Vec3,
+    yaw: f32,
+    pitch: f32,
+    pub fov_y: f32,
+    /// Camera speed in metres per second.
+    pub speed: f32,
+    pub light: Vec3,
+    light_box: Option<Aabb>,
+    camera_box: Option<Aabb>,
+    /// Whether the last light move was stopped by the edge of its box.
+    pub light_at_edge: bool,
+    pub shown: Shown,
+    pub exposure: f32,
+    pub overlay: bool,
+    pub help: bool,
+    camera_tween: Option<Tween>,
+    light_tween: Option<Tween>,
+}
+
+fn yaw_pitch(forward: Vec3) -> (f32, f32) {
+    let f = forward.normalize_or(Vec3::Z);
+    (f.x.atan2(f.z), f.y.clamp(-1.0, 1.0).asin())
+}
+
+impl ViewerState {
+    pub fn new(scene: &Scene, view: View, light: Vec3) -> Self {
+        let (yaw, pitch) = yaw_pitch(view.target - view.eye);
+        let bounds = scene.bounds();
+        let light_box = scene.moving_light.as_ref().map(|l| l.bounds);
+        let mut state = ViewerState {
+            scene_name: scene.name.clone(),
+            eye: view.eye,
+            yaw,
+            pitch,
+            fov_y: view.fov_y,
+            speed: (bounds.max - bounds.min).length().max(1e-3) * 0.25,
+            light,
+            light_box,
+            camera_box: scene.camera_box,
+            light_at_edge: false,
+            shown: Shown::Gi,
+            exposure: 0.0,
+            overlay: true,
+            help: true,
+            camera_tween: None,
+            light_tween: None,
+            home: view,
+            home_light: light,
+        };
+        state.set_light(light);
+        state
+    }
+
+    pub fn forward(&self) -> Vec3 {
+        Vec3::new(self.pitch.cos() * self.yaw.sin(), self.pitch.sin(), self.pitch.cos() * self.yaw.cos())
+    }
+
+    pub fn view(&self) -> View {
+        View { name: "viewer".into(), eye: self.eye, target: self.eye + self.forward(), up: Vec3::Y, fov_y: self.fov_y }
+    }
+
+    pub fn settings(&self) -> FrameSettings {
+        FrameSettings { view: self.view(), light: self.light, exposure_scale: self.exposure.exp2(), shown: self.shown }
+    }
+
+    fn set_camera(&mut self, eye: Vec3, target: Vec3) {
+        self.eye = eye;
+        (self.yaw, self.pitch) = yaw_pitch(target - eye);
+    }
+
+    /// Moves the light to `p`, or as near as its trained box allows.
+    fn set_light(&mut self, p: Vec3) {
+        match &self.light_box {
+            Some(b) => {
+                let clamped = p.clamp(b.min, b.max);
+                self.light_at_edge =
+                    clamped.distance(p) > 1e-6 || clamped.cmpeq(b.min).any() || clamped.cmpeq(b.max).any();
+                self.light = clamped;
+            }
+            None => self.light = p,
+        }
+    }
+
+    /// Turns the camera by a mouse move of `dx`, `dy` pixels.
+    pub fn look(&mut self, dx: f32, dy: f32) {
+        const RADIANS_PER_PIXEL: f32 = 0.003;
+        self.camera_tween = None;
+        self.yaw -= dx * RADIANS_PER_PIXEL;
+        self.pitch = (self.pitch - dy * RADIANS_PER_PIXEL).clamp(-1.55, 1.55);
+    }
+
+    /// The scroll wheel: each notch up makes the camera 25% faster.
+    pub fn scroll(&mut self, notches: f32) {
+        self.speed = (self.speed * 1.25f32.powf(notches)).clamp(1e-3, 1e4);
+    }
+
+    pub fn reset(&mut self) {
+        let home = self.home.clone();
+        self.set_camera(home.eye, home.target);
+        self.set_light(self.home_light);
+        self.camera_tween = None;
+        self.light_tween = None;
+    }
+
+    pub fn exposure_step(&mut self, stops: f32) {
+        self.exposure = (self.exposure + stops).clamp(-20.0, 20.0);
+    }
+
+    /// Advances held keys and running moves by `dt` seconds, at script time `t`.
+    pub fn update(&mut self, held: &std::collections::HashSet<Held>, dt: f32, t: f64) {
+        let on = |k: Held| if held.contains(&k) { 1.0f32 } else { 0.0 };
+        let forward = self.forward();
+        let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+        let walk = forward * (on(Held::Forward) - on(Held::Back))
+            + right * (on(Held::Right) - on(Held::Left))
+            + Vec3::Y * (on(Held::Up) - on(Held::Down));
+        if walk != Vec3::ZERO {
+            self.camera_tween = None;
+            let fast = if held.contains(&Held::Fast) { 4.0 } else { 1.0 };
+            self.eye += walk.normalize() * self.speed * fast * dt;
+        }
+        let light_walk = Vec3::new(
+            on(Held::LightRight) - on(Held::LightLeft),
+            on(Held::LightUp) - on(Held::LightDown),
+            on(Held::LightForward) - on(Held::LightBack),
+        );
+        if light_walk != Vec3::ZERO {
+            self.light_tween = None;
+            // Half the light box's diagonal per second.
+            let span = self.light_box.as_ref().map_or(1.0, |b| (b.max - b.min).length().max(1e-3));
+            self.set_light(self.light + light_walk.normalize() * span * 0.5 * dt);
+        }
+        if let Some(tween) = self.camera_tween {
+            let ([eye, target], done) = tween.at(t);
+            self.set_camera(eye, target);
+            if done {
+                self.camera_tween = None;
+            }
+        }
+        if let Some(tween) = self.light_tween {
+            let ([p, _], done) = tween.at(t);
+            self.set_light(p);
+            if done {
+                self.light_tween = None;
+            }
+        }
+    }
+
+    /// Applies a script action that changes the view (the caller handles the others) at
+    /// script time `t`.
+    pub fn apply(&mut self, action: &Action, t: f64) {
+        match *action {
+            Action::Camera { eye, target, over } => {
+                let from = [self.eye, self.eye + self.forward()];
+                self.camera_tween = Some(Tween { from, to: [eye, target], start: t, seconds: over });
+                self.update(&Default::default(), 0.0, t);
+            }
+            Action::Light { position, over } => {
+                self.light_tween = Some(Tween { from: [self.light; 2], to: [position; 2], start: t, seconds: over });
+                self.update(&Default::default(), 0.0, t);
+            }
+            Action::Component(shown) => self.shown = shown,
+            Action::Exposure(ev) => self.exposure = ev,
+            Action::Overlay(on) => self.overlay = on,
+            Action::Resize(..) | Action::Screenshot(_) | Action::Quit => {}
+        }
+    }
+
+    /// The overlay's text for the current frame.
+    pub fn overlay_text(&self, stats: &Stats, device: &str) -> TextGrid {
+        let mut grid = TextGrid::default();
+        let (fps, frame_ms) = stats.recent_rate();
+        grid.line(&format!("rrf {}  {fps:5.1} fps  {frame_ms:6.1} ms/frame  {device}", self.scene_name), Colour::White);
+        let gpu = stats.recent_gpu_ms();
+        let passes: Vec<String> = TIMED_PASSES.iter().zip(gpu).map(|(name, ms)| format!("{name} {ms:.2}")).collect();
+        grid.line(&format!("GPU ms: {}", passes.join("  ")), Colour::White);
+        let l = self.light;
+        if self.light_at_edge {
+            grid.line(
+                &format!("light {:.2},{:.2},{:.2}  at the edge of its trained box", l.x, l.y, l.z),
+                Colour::Yellow,
+            );
+        } else {
+            grid.line(&format!("light {:.2},{:.2},{:.2}", l.x, l.y, l.z), Colour::White);
+        }
+        let e = self.eye;
+        let outside = self.camera_box.as_ref().is_some_and(|b| !b.contains(e));
+        grid.line(
+            &format!(
+                "camera {:.2},{:.2},{:.2}{}",
+                e.x,
+                e.y,
+                e.z,
+                if outside { "  outside its trained box" } else { "" }
+            ),
+            if outside { Colour::Yellow } else { Colour::White },
+        );
+        grid.line(&format!("showing {}  exposure {:+.1} EV", self.shown.name(), self.exposure), Colour::Blue);
+        if self.help {
+            grid.gap();
+            for line in HELP {
+                grid.line(line, Colour::White);
+            }
+        } else {
+            grid.line("H: help", Colour::White);
+        }
+        grid
+    }
+}
+
+/// The controls, as the overlay shows them.
+pub const HELP: [&str; 6] = [
+    "W A S D: move   Q E: down, up   Shift: faster   wheel: speed",
+    "right mouse button held: look around",
+    "arrows, Page Up/Down: move the light (inside its trained box)",
+    "1 2 3: global, direct, indirect light   [ ]: exposure",
+    "P: screenshot   R: reset view and light   O: overlay",
+    "H: hide this help   Esc: quit",
+];
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn state() -> ViewerState {
+        let scene = Scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box")).unwrap();
+        let view = scene.views[0].clone();
+        let light = scene.moving_light.as_ref().unwrap().default_position;
+        ViewerState::new(&scene, view, light)
+    }
+
+    #[test]
+    fn the_view_round_trips_through_yaw_and_pitch() {
+        let s = state();
+        let v = s.view();
+        let home = &s.home;
+        let expected = (home.target - home.eye).normalize();
+        assert!((v.target - v.eye).normalize().distance(expected) < 1e-5);
+    }
+
+    #[test]
+    fn the_light_stays_in_its_box_and_says_so_at_the_edge() {
+        let mut s = state();
+        let b = s.light_box.unwrap();
+        let held = [Held::LightUp].into_iter().collect();
+        for _ in 0..600 {
+            s.update(&held, 1.0 / 60.0, 0.0);
+        }
+        assert!(b.contains(s.light));
+        assert!((s.light.y - b.max.y).abs() < 1e-6 && s.light_at_edge);
+        assert!(s.overlay_text(&Stats::default(), "test").text().contains("edge of its trained box"));
+        s.reset();
+        assert!(!s.light_at_edge || b.contains(s.light));
+    }
+
+    #[test]
+    fn scripted_moves_interpolate_and_finish() {
+        let mut s = state();
+        let start = s.eye;
+        let goal = start + Vec3::new(0.1, 0.0, 0.0);
+        s.apply(&Action::Camera { eye: goal, target: goal + Vec3::Z, over: 1.0 }, 0.0);
+        s.update(&Default::default(), 0.0, 0.5);
+        assert!(s.eye.distance(start.lerp(goal, 0.5)) < 1e-5);
+        s.update(&Default::default(), 0.0, 2.0);
+        assert!(s.eye.distance(goal) < 1e-6 && s.forward().distance(Vec3::Z) < 1e-5);
+    }
+}
