@@ -65,6 +65,10 @@ pub struct ViewArgs {
     /// Save the last frame to this PNG (with --frames or --script, or when headless).
     #[arg(long, value_name = "FILE.png")]
     pub screenshot: Option<PathBuf>,
+    /// Save every frame to this folder as frame-00000.png, frame-00001.png, … (for a video:
+    /// see the README).
+    #[arg(long, value_name = "DIR")]
+    pub record: Option<PathBuf>,
     /// Play a script of timed events (format below), then exit.
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
@@ -126,7 +130,11 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     };
     let mut state = ViewerState::new(&scene, view, light);
     state.overlay = !args.no_overlay;
-    let mut plan = RunPlan { script, frames: args.frames, screenshot: args.screenshot.clone() };
+    if let Some(dir) = &args.record {
+        std::fs::create_dir_all(dir).with_context(|| format!("--record: cannot create {}", dir.display()))?;
+    }
+    let mut plan =
+        RunPlan { script, frames: args.frames, screenshot: args.screenshot.clone(), record: args.record.clone() };
 
     let no_display = std::env::var_os("DISPLAY").is_none() && std::env::var_os("WAYLAND_DISPLAY").is_none();
     let event_loop = if args.headless || no_display {

@@ -27,6 +27,8 @@ pub struct RunPlan {
     pub frames: Option<u64>,
     /// Where to save the last frame.
     pub screenshot: Option<PathBuf>,
+    /// A folder to save every frame to, as `frame-00000.png` and on (for videos).
+    pub record: Option<PathBuf>,
 }
 
 impl RunPlan {
@@ -105,12 +107,15 @@ impl Session {
             let dt = self.last_tick.replace(now).map_or(0.0, |last| (now - last).as_secs_f64().min(0.25));
             (dt, self.frame as f64 * FRAME_SECONDS)
         };
-        let mut screenshot = self.pending_screenshot.take();
+        let mut screenshots: Vec<PathBuf> = self.pending_screenshot.take().into_iter().collect();
+        if let Some(dir) = &self.plan.record {
+            screenshots.push(dir.join(format!("frame-{:05}.png", self.frame)));
+        }
         if let Some(script) = &self.plan.script {
             for event in script.due(self.frame) {
                 match &event.action {
                     Action::Resize(w, h) => requests.resize = Some((*w, *h)),
-                    Action::Screenshot(path) => screenshot = Some(path.clone()),
+                    Action::Screenshot(path) => screenshots.push(path.clone()),
                     Action::Quit => requests.quit = true,
                     action => self.state.apply(action, t),
                 }
@@ -118,10 +123,10 @@ impl Session {
         }
         self.state.update(&self.held, dt as f32, t);
         let last = self.plan.last_frame().is_some_and(|n| self.frame + 1 >= n);
-        if last && self.plan.screenshot.is_some() {
-            screenshot = self.plan.screenshot.clone();
+        if let (true, Some(path)) = (last, &self.plan.screenshot) {
+            screenshots.push(path.clone());
         }
-        renderer.draw(&self.state, &mut self.stats, presenter, overlay_scale, screenshot)?;
+        renderer.draw(&self.state, &mut self.stats, presenter, overlay_scale, screenshots)?;
         self.frame += 1;
         report_saved(renderer)?;
         requests.quit |= last;

@@ -131,15 +131,15 @@ impl Renderer {
         Ok(true)
     }
 
-    /// Records and submits one frame of `state`; in a window, presents it. With `screenshot`,
-    /// also saves the frame as shown to that PNG once the GPU has finished it.
+    /// Records and submits one frame of `state`; in a window, presents it. Also saves the frame
+    /// as shown to each PNG of `screenshots`, once the GPU has finished it.
     pub fn draw(
         &mut self,
         state: &ViewerState,
         stats: &mut Stats,
         presenter: Option<&mut Presenter>,
         overlay_scale: u32,
-        screenshot: Option<PathBuf>,
+        screenshots: Vec<PathBuf>,
     ) -> Result<()> {
         let period_ns = self.period_ns;
         let saved = self.saved.clone();
@@ -166,9 +166,9 @@ impl Renderer {
         };
         let grid = state.overlay.then(|| state.overlay_text(stats, &ctx.info.name));
         let ldr = frame.ldr();
-        let readback = match &screenshot {
-            Some(_) => Some(ctx.create_readback_buffer(ldr)?),
-            None => None,
+        let readback = match screenshots.is_empty() {
+            false => Some(ctx.create_readback_buffer(ldr)?),
+            true => None,
         };
         let mut extra: Vec<Pass> = Vec::new();
         if let Some(buffer) = &readback {
@@ -187,15 +187,19 @@ impl Renderer {
         let wait = target.as_ref().map(|_| handles.image_available);
         let signal = target.as_ref().map(|(p, i)| p.swapchain.as_ref().expect("checked above").render_done(*i));
         ring.submit(ctx, wait, signal, period_ns.is_some())?;
-        if let (Some(buffer), Some(path)) = (readback, screenshot) {
+        if let Some(buffer) = readback {
             let extent = ldr.extent;
             ring.defer(Box::new(move |ctx: &Context| {
-                let result = ctx
-                    .decode(vk::Format::R8G8B8A8_UNORM, &buffer)
-                    .map_err(anyhow::Error::from)
-                    .and_then(|rgba| save_png(&path, extent, &rgba).map(|()| path));
+                match ctx.decode(vk::Format::R8G8B8A8_UNORM, &buffer) {
+                    Ok(rgba) => {
+                        for path in screenshots {
+                            let result = save_png(&path, extent, &rgba).map(|()| path);
+                            saved.borrow_mut().push(result);
+                        }
+                    }
+                    Err(e) => saved.borrow_mut().push(Err(e.into())),
+                }
                 ctx.destroy_buffer(buffer);
-                saved.borrow_mut().push(result);
             }));
         }
         if let Some((p, index)) = target {

@@ -10,11 +10,22 @@ mod scenes;
 use std::path::Path;
 use std::process::{Command, ExitCode};
 
-/// What running rrf needs: the Vulkan loader and lavapipe, Mesa's CPU Vulkan driver.
-const RUN_PACKAGES: &[&str] = &["libvulkan1", "mesa-vulkan-drivers"];
+/// What running rrf needs: the Vulkan loader, lavapipe (Mesa's CPU Vulkan driver), and the X
+/// client libraries that winit opens at run time for the viewer's window.
+const RUN_PACKAGES: &[&str] = &[
+    "libvulkan1",
+    "mesa-vulkan-drivers",
+    "libx11-6",
+    "libx11-xcb1",
+    "libxcursor1",
+    "libxrandr2",
+    "libxi6",
+    "libxkbcommon-x11-0",
+];
 /// What the tests need on top: the Khronos validation layer, which every GPU test runs under,
-/// and a C++ compiler for the vendored glslang.
-const TEST_PACKAGES: &[&str] = &["vulkan-validationlayers", "g++"];
+/// a C++ compiler for the vendored glslang, and Xvfb (with xauth, which xvfb-run needs) for
+/// the viewer's window tests.
+const TEST_PACKAGES: &[&str] = &["vulkan-validationlayers", "g++", "xvfb", "xauth"];
 
 /// The scene the main job runs on.
 const DEFAULT_SCENE: &str = "scenes/cornell-box";
@@ -23,8 +34,8 @@ const USAGE: &str = "\
 usage: cargo xtask <task>
 
 tasks:
-  run     install what rrf needs (apt-get), build it, and render the default scene from its
-          shipped model to frame.png
+  run     install what rrf needs (apt-get), build it, and open the viewer on the default scene
+          (without a display: render one frame headless to view.png)
   test    install what the tests need (apt-get), then run every test on lavapipe with the
           Vulkan validation layer on
   setup   only install the system packages that the tests need
@@ -35,8 +46,7 @@ fn main() -> ExitCode {
     let result = match task.as_str() {
         "run" => install(RUN_PACKAGES)
             .and_then(|()| cargo(&["run", "--release", "--", "info"]))
-            .and_then(|()| cargo(&["run", "--release", "--", "info", DEFAULT_SCENE]))
-            .and_then(|()| cargo(&["run", "--release", "--", "render", DEFAULT_SCENE, "-o", "frame.png"])),
+            .and_then(|()| cargo(&["run", "--release", "--", "view", DEFAULT_SCENE])),
         "test" => install(&[RUN_PACKAGES, TEST_PACKAGES].concat())
             .and_then(|()| cargo(&["run", "--release", "--", "info"]))
             .and_then(|()| cargo(&["test", "--release", "--workspace"])),

@@ -1,0 +1,156 @@
+//! `rrf view`: a scripted run in a real window under Xvfb (camera move, light move, component
+//! switch, resize) with core and synchronization validation required, its screenshot against
+//! `rrf render` of the same view, light and size; the headless fallback; script errors.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::rrf;
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("rrf-view-{}-{name}", std::process::id()))
+}
+
+fn load(path: &Path) -> image::RgbImage {
+    image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8()
+}
+
+/// Pixels that differ by more than `levels` in some channel, and the mean difference.
+fn difference(a: &image::RgbImage, b: &image::RgbImage, levels: u8) -> (usize, f64) {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let mut off = 0;
+    let mut total = 0u64;
+    for (p, q) in a.pixels().zip(b.pixels()) {
+        let d = p.0.iter().zip(q.0).map(|(&x, y)| x.abs_diff(y)).max().unwrap();
+        off += usize::from(d > levels);
+        total += u64::from(d);
+    }
+    (off, total as f64 / (a.width() * a.height()) as f64)
+}
+
+/// Runs `rrf ARGS` in a window on a fresh Xvfb display (`xvfb-run`, which `cargo xtask
+/// setup` installs).
+fn rrf_in_xvfb(args: &[&str]) -> std::process::Output {
+    let xvfb = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1280x1024x24", env!("CARGO_BIN_EXE_rrf")])
+        .args(args)
+        .env("RRF_DEVICE", "llvmpipe")
+        .env("RRF_VALIDATION", "required")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output();
+    xvfb.unwrap_or_else(|e| panic!("cannot run xvfb-run ({e}); install Xvfb with `cargo xtask setup`"))
+}
+
+#[test]
+fn scripted_window_run_is_clean_and_matches_render() {
+    let shot = temp("window.png");
+    let script = temp("script.txt");
+    let (eye, target, light) = ("0.40,0.35,-0.45", "0.22,0.2,0.35", "0.2,0.47,0.3");
+    std::fs::write(
+        &script,
+        format!(
+            "# every kind of event the test needs\n\
+             0    camera 0.278,0.273,-0.8 0.278,0.273,0.2\n\
+             0.05 camera {eye} {target} over 0.2\n\
+             0.1  light {light} over 0.15\n\
+             0.2  component indirect\n\
+             0.25 resize 200x150\n\
+             0.35 component gi\n\
+             0.45 screenshot {}\n\
+             0.5  quit\n",
+            shot.display()
+        ),
+    )
+    .unwrap();
+    let run = rrf_in_xvfb(&[
+        "view",
+        "scenes/cornell-box",
+        "--size",
+        "256x192",
+        "--no-overlay",
+        "--stats",
+        "--script",
+        script.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "rrf view failed:\n{stderr}");
+    assert!(!stderr.contains("headless"), "the run did not open a window:\n{stderr}");
+    assert!(stderr.contains(&format!("saved screenshot {}", shot.display())), "{stderr}");
+    let stats: serde_json::Value = serde_json::from_slice(&run.stdout).expect("--stats prints one JSON line");
+    assert_eq!(stats["frames"], 31, "0.5 s of script time at 60 frames per second, plus the last frame");
+    assert!(stats["gpu_ms"]["network_ms"].as_f64().unwrap() > 0.0);
+
+    let reference = temp("render.png");
+    let camera = format!("{eye}:{target}");
+    let render = rrf(
+        &[
+            "render",
+            "scenes/cornell-box",
+            "--camera",
+            &camera,
+            "--light",
+            light,
+            "--size",
+            "200x150",
+            "-o",
+            reference.to_str().unwrap(),
+        ],
+        &[("RRF_VALIDATION", "required")],
+    );
+    assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
+    let (viewer, rendered) = (load(&shot), load(&reference));
+    assert_eq!(viewer.dimensions(), (200, 150), "the screenshot has the size the script asked for");
+    let (off, mean) = difference(&viewer, &rendered, 2);
+    eprintln!("{off} pixels differ by more than 2 levels; mean {mean:.3}");
+    assert!(off * 100 <= (200 * 150), "{off} pixels differ from rrf render by more than 2 levels");
+    assert!(mean < 0.5, "mean difference {mean:.3} levels");
+    for f in [shot, script, reference] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
+#[test]
+fn without_a_display_it_renders_headless_and_says_where() {
+    let dir = temp("headless");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_rrf"));
+    cmd.args(["view", "scenes/cornell-box", "--size", "64x48"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env("RRF_DEVICE", "llvmpipe")
+        .env("RRF_VALIDATION", "required")
+        .arg("--screenshot")
+        .arg(dir.join("view.png"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"));
+    let run = cmd.output().unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    assert!(stderr.contains("no display") && stderr.contains("rendering headless"), "{stderr}");
+    assert!(stderr.contains("saved screenshot"), "{stderr}");
+    assert_eq!(load(&dir.join("view.png")).dimensions(), (64, 48));
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn a_bad_script_names_the_file_and_line() {
+    let script = temp("bad.txt");
+    std::fs::write(&script, "0 camera 0,0,0 1,1,1\n1 fly 2,2,2\n").unwrap();
+    let run = rrf(&["view", "scenes/cornell-box", "--headless", "--script", script.to_str().unwrap()], &[]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        stderr.contains(script.to_str().unwrap()) && stderr.contains("line 2") && stderr.contains("unknown command")
+    );
+    let _ = std::fs::remove_file(script);
+}
+
+#[test]
+fn shipped_demo_scripts_parse() {
+    for scene in ["cornell-box", "glossy-room", "many-objects"] {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene).join("demo.txt");
+        let script = rrf::viewer::script::Script::load(&path).unwrap();
+        assert!(script.frames() > 60, "{scene}'s demo is too short");
+    }
+}
