@@ -12,7 +12,7 @@ use crate::resources::{Buffer, Image};
 use crate::sync::{Access, Pass, Use};
 
 /// Characters per line and lines of the overlay.
-pub const COLUMNS: u32 = 72;
+pub const COLUMNS: u32 = 96;
 pub const ROWS: u32 = 24;
 
 /// Colours of the overlay's palette (`overlay.comp`).
@@ -52,11 +52,6 @@ impl TextGrid {
             let ch = if ch.is_ascii() && !ch.is_ascii_control() { ch as u32 } else { u32::from(b'?') };
             *cell = ch | (colour as u32) << 8;
         }
-        self.next_row += 1;
-    }
-
-    /// An empty, transparent line.
-    pub fn gap(&mut self) {
         self.next_row += 1;
     }
 

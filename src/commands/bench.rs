@@ -202,7 +202,7 @@ fn print_row(row: &serde_json::Value, json: bool) {
     let s = |key: &str| row[key].as_str().unwrap_or_default().to_string();
     println!(
         "{} {} on {}, {}x{}, median of {} frames (pipelines built in {:.0} ms):\n  \
-         G-buffer {:.2} ms, network {:.2} ms, tonemap {:.2} ms; frame (CPU, submit to finish) {:.2} ms\n  \
+         G-buffer {:.2} ms, network {:.2} ms, tonemap {:.2} ms; frame {:.2} ms (CPU, start to start, {} frames in flight)\n  \
          {:.1} M network-pixels/s ({:.1} GFLOP/s{})",
         s("scene"),
         s("variant"),
@@ -215,6 +215,7 @@ fn print_row(row: &serde_json::Value, json: bool) {
         f("network_ms"),
         f("tonemap_ms"),
         f("frame_ms"),
+        FRAMES_IN_FLIGHT,
         f("network_pixels_per_s") / 1e6,
         f("network_gflops"),
         row["peak_fraction"].as_f64().map(|p| format!(", {:.1}% of peak", 100.0 * p)).unwrap_or_default(),

@@ -216,43 +216,39 @@ impl ViewerState {
         }
     }
 
-    /// The overlay's text for the current frame.
+    /// The overlay's text for the current frame: one dark box of lines of equal width.
     pub fn overlay_text(&self, stats: &Stats, device: &str) -> TextGrid {
-        let mut grid = TextGrid::default();
+        let mut lines: Vec<(String, Colour)> = Vec::new();
         let (fps, frame_ms) = stats.recent_rate();
-        grid.line(&format!("rrf {}  {fps:5.1} fps  {frame_ms:6.1} ms/frame  {device}", self.scene_name), Colour::White);
+        lines.push((
+            format!("rrf {}  {fps:5.1} fps  {frame_ms:6.1} ms/frame  {device}", self.scene_name),
+            Colour::White,
+        ));
         let gpu = stats.recent_gpu_ms();
         let passes: Vec<String> = TIMED_PASSES.iter().zip(gpu).map(|(name, ms)| format!("{name} {ms:.2}")).collect();
-        grid.line(&format!("GPU ms: {}", passes.join("  ")), Colour::White);
+        lines.push((format!("GPU ms: {}", passes.join("  ")), Colour::White));
         let l = self.light;
-        if self.light_at_edge {
-            grid.line(
-                &format!("light {:.2},{:.2},{:.2}  at the edge of its trained box", l.x, l.y, l.z),
-                Colour::Yellow,
-            );
-        } else {
-            grid.line(&format!("light {:.2},{:.2},{:.2}", l.x, l.y, l.z), Colour::White);
-        }
+        let edge = if self.light_at_edge { "  at the edge of its trained box" } else { "" };
+        let colour = if self.light_at_edge { Colour::Yellow } else { Colour::White };
+        lines.push((format!("light {:.2},{:.2},{:.2}{edge}", l.x, l.y, l.z), colour));
         let e = self.eye;
         let outside = self.camera_box.as_ref().is_some_and(|b| !b.contains(e));
-        grid.line(
-            &format!(
-                "camera {:.2},{:.2},{:.2}{}",
-                e.x,
-                e.y,
-                e.z,
-                if outside { "  outside its trained box" } else { "" }
-            ),
+        let note = if outside { "  outside its trained box" } else { "" };
+        lines.push((
+            format!("camera {:.2},{:.2},{:.2}{note}", e.x, e.y, e.z),
             if outside { Colour::Yellow } else { Colour::White },
-        );
-        grid.line(&format!("showing {}  exposure {:+.1} EV", self.shown.name(), self.exposure), Colour::Blue);
+        ));
+        lines.push((format!("showing {}  exposure {:+.1} EV", self.shown.name(), self.exposure), Colour::Blue));
         if self.help {
-            grid.gap();
-            for line in HELP {
-                grid.line(line, Colour::White);
-            }
+            lines.push((String::new(), Colour::White));
+            lines.extend(HELP.iter().map(|h| (h.to_string(), Colour::White)));
         } else {
-            grid.line("H: help", Colour::White);
+            lines.push(("H: help".into(), Colour::White));
+        }
+        let width = lines.iter().map(|(t, _)| t.len()).max().unwrap_or(0);
+        let mut grid = TextGrid::default();
+        for (text, colour) in lines {
+            grid.line(&format!("{text:<width$}"), colour);
         }
         grid
     }
