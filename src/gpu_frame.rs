@@ -18,7 +18,7 @@ use rrf_renderer::overlay::{OverlayPass, TextGrid};
 use rrf_renderer::resources::read_back_passes;
 use rrf_renderer::sync::{run_passes, Pass, ResourceStates};
 use rrf_renderer::tonemap::TonemapPass;
-use rrf_renderer::{vk, Context, Image};
+use rrf_renderer::{vk, Context, Destroy, Image};
 
 use crate::gpu_scene::{gbuffer_constants, gbuffer_vertices, moving_light_object};
 use crate::shaders;
@@ -112,33 +112,32 @@ pub struct GpuFrame {
 impl GpuFrame {
     /// Everything for frames of `scene` at `extent` with network pass `variant`.
     pub fn new(ctx: &Context, scene: &Scene, model: &Model, variant: Variant, extent: vk::Extent2D) -> Result<Self> {
-        let targets = GBufferTargets::new(ctx, extent)?;
-        let mesh = GBufferMesh::new(ctx, &gbuffer_vertices(scene))?;
-        let gbuffer = GBufferPass::new(ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG)?;
+        // Each part is destroyed again if a later one cannot be made.
+        let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
+        let mesh = ctx.guard(GBufferMesh::new(ctx, &gbuffer_vertices(scene))?);
+        let gbuffer = ctx.guard(GBufferPass::new(ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG)?);
         let network_shaders = NetworkShaders {
             storage: shaders::NETWORK_STORAGE_COMP,
             classify: shaders::NETWORK_CLASSIFY_COMP,
             specialized: shaders::NETWORK_SPECIALIZED_COMP,
         };
-        let network = NetworkPass::new(ctx, variant, &network_shaders, &targets, &object_networks(scene, model))?;
-        let ldr = create_ldr(ctx, extent)?;
-        let outputs = &network.outputs;
-        let tonemaps = [
-            TonemapPass::new(ctx, shaders::TONEMAP_COMP, &outputs.gi, &ldr)?,
-            TonemapPass::new(ctx, shaders::TONEMAP_COMP, &outputs.direct, &ldr)?,
-            TonemapPass::new(ctx, shaders::TONEMAP_COMP, &outputs.indirect, &ldr)?,
-        ];
+        let objects = object_networks(scene, model);
+        let network = ctx.guard(NetworkPass::new(ctx, variant, &network_shaders, &targets, &objects)?);
+        let ldr = ctx.guard(create_ldr(ctx, extent)?);
+        let mut tonemaps = ctx.guard(Vec::with_capacity(3));
+        for hdr in [&network.outputs.gi, &network.outputs.direct, &network.outputs.indirect] {
+            tonemaps.push(TonemapPass::new(ctx, shaders::TONEMAP_COMP, hdr, &ldr)?);
+        }
         let overlay = OverlayPass::new(ctx, shaders::OVERLAY_COMP, &font8x8::legacy::BASIC_LEGACY, &ldr)?;
-        let default_light = scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position);
         let frame = GpuFrame {
-            targets,
-            mesh,
-            gbuffer,
-            network,
-            ldr,
-            tonemaps,
+            targets: targets.keep(),
+            mesh: mesh.keep(),
+            gbuffer: gbuffer.keep(),
+            network: network.keep(),
+            ldr: ldr.keep(),
+            tonemaps: tonemaps.keep().try_into().ok().expect("three tonemap passes"),
             overlay,
-            default_light,
+            default_light: scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position),
             light_object: moving_light_object(scene),
             states: RefCell::default(),
         };
@@ -174,21 +173,11 @@ impl GpuFrame {
         if extent == self.extent() {
             return Ok(());
         }
-        let targets = GBufferTargets::new(ctx, extent)?;
-        let ldr = match create_ldr(ctx, extent) {
-            Ok(ldr) => ldr,
-            Err(e) => {
-                targets.destroy(ctx);
-                return Err(e);
-            }
-        };
-        if let Err(e) = self.network.resize(ctx, &targets) {
-            targets.destroy(ctx);
-            ctx.destroy_image(ldr);
-            return Err(e.into());
-        }
-        std::mem::replace(&mut self.targets, targets).destroy(ctx);
-        ctx.destroy_image(std::mem::replace(&mut self.ldr, ldr));
+        let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
+        let ldr = ctx.guard(create_ldr(ctx, extent)?);
+        self.network.resize(ctx, &targets)?;
+        std::mem::replace(&mut self.targets, targets.keep()).destroy(ctx);
+        ctx.destroy_image(std::mem::replace(&mut self.ldr, ldr.keep()));
         let outputs = &self.network.outputs;
         for (pass, hdr) in self.tonemaps.iter().zip([&outputs.gi, &outputs.direct, &outputs.indirect]) {
             pass.rebind(ctx, hdr, &self.ldr);
@@ -282,6 +271,12 @@ impl GpuFrame {
     }
 
     pub fn destroy(self, ctx: &Context) {
+        Destroy::destroy(self, ctx);
+    }
+}
+
+impl Destroy for GpuFrame {
+    fn destroy(self, ctx: &Context) {
         self.overlay.destroy(ctx);
         for pass in self.tonemaps {
             pass.destroy(ctx);
@@ -295,17 +290,12 @@ impl GpuFrame {
 }
 
 fn create_ldr(ctx: &Context, extent: vk::Extent2D) -> Result<Image> {
-    let ldr = ctx.create_image(
+    let ldr = ctx.guard(ctx.create_image(
         "ldr",
         extent,
         vk::Format::R8G8B8A8_UNORM,
         vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-    )?;
-    if let Err(e) =
-        ctx.submit_once(|cmd| ctx.transition(cmd, &ldr, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL))
-    {
-        ctx.destroy_image(ldr);
-        return Err(e.into());
-    }
-    Ok(ldr)
+    )?);
+    ctx.submit_once(|cmd| ctx.transition(cmd, &ldr, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL))?;
+    Ok(ldr.keep())
 }

@@ -9,6 +9,7 @@ use ash::vk;
 
 use crate::context::Context;
 use crate::error::{Result, VkContext};
+use crate::guard::Destroy;
 use crate::resources::{Buffer, Image};
 
 /// A resource bound at the binding with the same index as its position in the list.
@@ -90,10 +91,19 @@ impl ComputePass {
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
             .collect();
+        // Made step by step; a failed step destroys what was made (null handles are skipped).
+        let mut pass = ctx.guard(ComputePass {
+            pipelines: Vec::new(),
+            layout: vk::PipelineLayout::null(),
+            set_layout: vk::DescriptorSetLayout::null(),
+            pool: vk::DescriptorPool::null(),
+            set: vk::DescriptorSet::null(),
+            workgroup,
+        });
         // SAFETY: all create infos are valid and outlive their calls; every object is
-        // destroyed in `destroy`.
+        // destroyed by `destroy`.
         unsafe {
-            let set_layout = device
+            pass.set_layout = device
                 .create_descriptor_set_layout(
                     &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
                     None,
@@ -103,19 +113,20 @@ impl ComputePass {
                 .stage_flags(vk::ShaderStageFlags::COMPUTE)
                 .offset(0)
                 .size(push_bytes)];
-            let set_layouts = [set_layout];
+            let set_layouts = [pass.set_layout];
             let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
             if push_bytes > 0 {
                 layout_info = layout_info.push_constant_ranges(&push);
             }
-            let layout = device.create_pipeline_layout(&layout_info, None).vk("vkCreatePipelineLayout")?;
+            pass.layout = device.create_pipeline_layout(&layout_info, None).vk("vkCreatePipelineLayout")?;
 
+            ctx.step("vkCreateComputePipelines")?;
             let module = device
                 .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None)
                 .vk("vkCreateShaderModule")?;
-            let pipelines = create_pipelines(device, module, layout, specializations);
+            let pipelines = create_pipelines(device, module, pass.layout, specializations);
             device.destroy_shader_module(module, None);
-            let pipelines = pipelines?;
+            pass.pipelines = pipelines?;
 
             let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
             for b in bindings {
@@ -124,35 +135,29 @@ impl ComputePass {
                     None => sizes.push(vk::DescriptorPoolSize { ty: b.descriptor_type(), descriptor_count: 1 }),
                 }
             }
-            let pool = if sizes.is_empty() {
-                vk::DescriptorPool::null()
-            } else {
-                device
+            if !sizes.is_empty() {
+                pass.pool = device
                     .create_descriptor_pool(
                         &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes),
                         None,
                     )
-                    .vk("vkCreateDescriptorPool")?
-            };
-            let set = if sizes.is_empty() {
-                vk::DescriptorSet::null()
-            } else {
-                device
+                    .vk("vkCreateDescriptorPool")?;
+                pass.set = device
                     .allocate_descriptor_sets(
-                        &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pool).set_layouts(&set_layouts),
+                        &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pass.pool).set_layouts(&set_layouts),
                     )
-                    .vk("vkAllocateDescriptorSets")?[0]
-            };
-            write_set(device, set, bindings);
+                    .vk("vkAllocateDescriptorSets")?[0];
+            }
+            write_set(device, pass.set, bindings);
 
-            for (i, &pipeline) in pipelines.iter().enumerate() {
-                let label = if pipelines.len() > 1 { format!("{name} #{i}") } else { name.to_string() };
+            for (i, &pipeline) in pass.pipelines.iter().enumerate() {
+                let label = if pass.pipelines.len() > 1 { format!("{name} #{i}") } else { name.to_string() };
                 ctx.set_name(pipeline, &label);
             }
-            ctx.set_name(layout, name);
-            ctx.set_name(set_layout, name);
-            Ok(Self { pipelines, layout, set_layout, pool, set, workgroup })
+            ctx.set_name(pass.layout, name);
+            ctx.set_name(pass.set_layout, name);
         }
+        Ok(pass.keep())
     }
 
     /// Points the descriptor set at other resources of the same kinds and order (after a
@@ -196,8 +201,15 @@ impl ComputePass {
     }
 
     pub fn destroy(self, ctx: &Context) {
+        Destroy::destroy(self, ctx);
+    }
+}
+
+impl Destroy for ComputePass {
+    fn destroy(self, ctx: &Context) {
         let device = &ctx.device;
-        // SAFETY: the caller has finished all GPU work that uses the pass.
+        // SAFETY: the caller has finished all GPU work that uses the pass; null handles (of a
+        // pass only partly made) are ignored by the destroy calls.
         unsafe {
             for pipeline in self.pipelines {
                 device.destroy_pipeline(pipeline, None);

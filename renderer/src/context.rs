@@ -2,6 +2,7 @@
 
 use std::ffi::{c_char, CStr};
 use std::mem::ManuallyDrop;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Mutex;
 
 use ash::vk;
@@ -71,6 +72,9 @@ pub struct Context {
     /// Boxed so that the messenger callback's pointer stays valid when the context moves.
     validation: Box<ValidationLog>,
     torn_down: bool,
+    /// Creation steps taken so far, and the one that is to fail (see `fail_at_step`).
+    steps: AtomicU32,
+    fail_at_step: AtomicU32,
 }
 
 struct Debug {
@@ -232,6 +236,8 @@ impl Context {
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             validation,
             torn_down: false,
+            steps: AtomicU32::new(0),
+            fail_at_step: AtomicU32::new(u32::MAX),
         };
         context.set_name(context.queue, "main queue");
         context.set_name(context.command_pool, "one-shot command pool");
@@ -268,6 +274,29 @@ impl Context {
         let _ = unsafe { debug.device.set_debug_utils_object_name(&info) };
     }
 
+    /// Counts a creation step that can fail, and fails it if it is the one `fail_at_step`
+    /// names.
+    pub(crate) fn step(&self, call: &'static str) -> Result<()> {
+        let step = self.steps.fetch_add(1, Ordering::SeqCst);
+        if self.fail_at_step.load(Ordering::SeqCst) == step {
+            return Err(Error::Vulkan { call, result: vk::Result::ERROR_OUT_OF_DEVICE_MEMORY });
+        }
+        Ok(())
+    }
+
+    /// For tests of error paths: makes creation step `step` fail with
+    /// `VK_ERROR_OUT_OF_DEVICE_MEMORY`, as a real allocation failure would. Steps are counted
+    /// from 0 over the context's life ([`Context::steps_taken`]): buffers, images, pipelines,
+    /// one-shot submissions, frame slots. `None` turns the injection off.
+    pub fn fail_at_step(&self, step: Option<u32>) {
+        self.fail_at_step.store(step.unwrap_or(u32::MAX), Ordering::SeqCst);
+    }
+
+    /// Creation steps taken so far.
+    pub fn steps_taken(&self) -> u32 {
+        self.steps.load(Ordering::SeqCst)
+    }
+
     /// Opens a named region of `cmd` that validation messages and GPU debuggers show.
     pub fn begin_label(&self, cmd: vk::CommandBuffer, name: &str) {
         let Some(debug) = &self.debug else { return };
@@ -286,6 +315,7 @@ impl Context {
 
     /// Records commands with `record`, submits them and waits for them to finish.
     pub fn submit_once<R>(&self, record: impl FnOnce(vk::CommandBuffer) -> R) -> Result<R> {
+        self.step("vkQueueSubmit")?;
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(self.command_pool)
             .level(vk::CommandBufferLevel::PRIMARY)

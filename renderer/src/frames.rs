@@ -67,6 +67,7 @@ impl FrameLoop {
     }
 
     fn make_slot(&self, ctx: &Context, index: usize) -> Result<FrameSlot> {
+        ctx.step("vkCreateFence")?;
         let device = &ctx.device;
         let alloc = vk::CommandBufferAllocateInfo::default()
             .command_pool(self.pool)

@@ -7,6 +7,7 @@ use gpu_allocator::MemoryLocation;
 
 use crate::context::Context;
 use crate::error::{Result, VkContext};
+use crate::guard::Destroy;
 use crate::resources::{Buffer, Image};
 use crate::sync::{Access, Pass, ResourceStates, Use};
 
@@ -58,26 +59,26 @@ impl GBufferTargets {
     pub fn new(ctx: &Context, extent: vk::Extent2D) -> Result<Self> {
         let color =
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
-        let targets = GBufferTargets {
-            position: ctx.create_image("gbuffer position", extent, POSITION_FORMAT, color)?,
-            normal: ctx.create_image("gbuffer normal", extent, NORMAL_FORMAT, color)?,
-            object: ctx.create_image("gbuffer object", extent, OBJECT_FORMAT, color)?,
-            emission: ctx.create_image("gbuffer emission", extent, EMISSION_FORMAT, color)?,
-            depth: ctx.create_image(
-                "gbuffer depth",
-                extent,
-                DEPTH_FORMAT,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-            )?,
-            extent,
-        };
+        let image = |name, format, usage| ctx.create_image(name, extent, format, usage).map(|i| ctx.guard(i));
+        let position = image("gbuffer position", POSITION_FORMAT, color)?;
+        let normal = image("gbuffer normal", NORMAL_FORMAT, color)?;
+        let object = image("gbuffer object", OBJECT_FORMAT, color)?;
+        let emission = image("gbuffer emission", EMISSION_FORMAT, color)?;
+        let depth = image("gbuffer depth", DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?;
         ctx.submit_once(|cmd| {
-            for image in targets.colors() {
+            for image in [&position, &normal, &object, &emission] {
                 ctx.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
             }
-            ctx.transition(cmd, &targets.depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
+            ctx.transition(cmd, &depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
         })?;
-        Ok(targets)
+        Ok(GBufferTargets {
+            position: position.keep(),
+            normal: normal.keep(),
+            object: object.keep(),
+            emission: emission.keep(),
+            depth: depth.keep(),
+            extent,
+        })
     }
 
     fn colors(&self) -> [&Image; 4] {
@@ -93,6 +94,12 @@ impl GBufferTargets {
     }
 
     pub fn destroy(self, ctx: &Context) {
+        Destroy::destroy(self, ctx);
+    }
+}
+
+impl Destroy for GBufferTargets {
+    fn destroy(self, ctx: &Context) {
         for image in [self.position, self.normal, self.object, self.emission, self.depth] {
             ctx.destroy_image(image);
         }
@@ -108,32 +115,30 @@ pub struct GBufferMesh {
 impl GBufferMesh {
     pub fn new(ctx: &Context, vertices: &[GBufferVertex]) -> Result<Self> {
         let bytes: &[u8] = bytemuck::cast_slice(vertices);
-        let staging = ctx.create_buffer_with_data("mesh staging", bytes, vk::BufferUsageFlags::TRANSFER_SRC)?;
-        let buffer = ctx.create_buffer(
+        let staging =
+            ctx.guard(ctx.create_buffer_with_data("mesh staging", bytes, vk::BufferUsageFlags::TRANSFER_SRC)?);
+        let buffer = ctx.guard(ctx.create_buffer(
             "scene vertices",
             bytes.len() as u64,
             vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
-        );
-        let buffer = match buffer {
-            Ok(b) => b,
-            Err(e) => {
-                ctx.destroy_buffer(staging);
-                return Err(e);
-            }
-        };
-        let copied = ctx.submit_once(|cmd| {
+        )?);
+        ctx.submit_once(|cmd| {
             let region = vk::BufferCopy { src_offset: 0, dst_offset: 0, size: bytes.len() as u64 };
             // SAFETY: both buffers hold at least `bytes.len()` bytes.
             unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &[region]) };
-        });
-        ctx.destroy_buffer(staging);
-        copied?;
-        Ok(GBufferMesh { buffer, vertex_count: vertices.len() as u32 })
+        })?;
+        Ok(GBufferMesh { buffer: buffer.keep(), vertex_count: vertices.len() as u32 })
     }
 
     pub fn destroy(self, ctx: &Context) {
         ctx.destroy_buffer(self.buffer);
+    }
+}
+
+impl Destroy for GBufferMesh {
+    fn destroy(self, ctx: &Context) {
+        GBufferMesh::destroy(self, ctx);
     }
 }
 
@@ -149,17 +154,24 @@ impl GBufferPass {
         let push = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::VERTEX)
             .size(std::mem::size_of::<GBufferConstants>() as u32)];
+        // Destroyed by the guard if a step fails; null handles are skipped.
+        let mut pass = ctx.guard(GBufferPass { pipeline: vk::Pipeline::null(), layout: vk::PipelineLayout::null() });
         // SAFETY: valid create infos that outlive the calls; objects destroyed in `destroy`.
         unsafe {
-            let layout = device
+            pass.layout = device
                 .create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&push), None)
                 .vk("vkCreatePipelineLayout")?;
-            let vs = device
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(vertex), None)
-                .vk("vkCreateShaderModule")?;
-            let fs = device
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(fragment), None)
-                .vk("vkCreateShaderModule")?;
+            let layout = pass.layout;
+            ctx.step("vkCreateGraphicsPipelines")?;
+            let module = |code| device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None);
+            let vs = module(vertex).vk("vkCreateShaderModule")?;
+            let fs = match module(fragment) {
+                Ok(fs) => fs,
+                Err(e) => {
+                    device.destroy_shader_module(vs, None);
+                    return Err(e).vk("vkCreateShaderModule");
+                }
+            };
             let stages = [
                 vk::PipelineShaderStageCreateInfo::default()
                     .stage(vk::ShaderStageFlags::VERTEX)
@@ -232,11 +244,11 @@ impl GBufferPass {
             let pipeline = device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None);
             device.destroy_shader_module(vs, None);
             device.destroy_shader_module(fs, None);
-            let pipeline = pipeline.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
-            ctx.set_name(pipeline, "gbuffer");
+            pass.pipeline = pipeline.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
+            ctx.set_name(pass.pipeline, "gbuffer");
             ctx.set_name(layout, "gbuffer");
-            Ok(GBufferPass { pipeline, layout })
         }
+        Ok(pass.keep())
     }
 
     /// The pass for a frame list: it writes every target and reads the mesh.
@@ -317,7 +329,13 @@ impl GBufferPass {
     }
 
     pub fn destroy(self, ctx: &Context) {
-        // SAFETY: no GPU work that uses the pipeline is pending.
+        Destroy::destroy(self, ctx);
+    }
+}
+
+impl Destroy for GBufferPass {
+    fn destroy(self, ctx: &Context) {
+        // SAFETY: no GPU work that uses the pipeline is pending; null handles are ignored.
         unsafe {
             ctx.device.destroy_pipeline(self.pipeline, None);
             ctx.device.destroy_pipeline_layout(self.layout, None);

@@ -18,6 +18,7 @@ use crate::compute::{Bind, ComputePass, Dispatch, Specialization};
 use crate::context::Context;
 use crate::error::{Error, Result};
 use crate::gbuffer::GBufferTargets;
+use crate::guard::Destroy;
 use crate::resources::{Buffer, Image};
 use crate::sync::{Access, Pass, ResourceStates, Use};
 
@@ -189,42 +190,22 @@ impl NetworkOutputs {
     fn new(ctx: &Context, extent: vk::Extent2D) -> Result<Self> {
         let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let format = vk::Format::R32G32B32A32_SFLOAT;
-        let direct = ctx.create_image("direct", extent, format, usage)?;
-        let made = (|| {
-            let indirect = ctx.create_image("indirect", extent, format, usage)?;
-            match ctx.create_image("gi", extent, format, usage) {
-                Ok(gi) => Ok((indirect, gi)),
-                Err(e) => {
-                    ctx.destroy_image(indirect);
-                    Err(e)
-                }
-            }
-        })();
-        let outputs = match made {
-            Ok((indirect, gi)) => NetworkOutputs { direct, indirect, gi },
-            Err(e) => {
-                ctx.destroy_image(direct);
-                return Err(e);
-            }
-        };
-        let transitioned = ctx.submit_once(|cmd| {
-            for image in outputs.all() {
+        let image = |name| ctx.create_image(name, extent, format, usage).map(|i| ctx.guard(i));
+        let (direct, indirect, gi) = (image("direct")?, image("indirect")?, image("gi")?);
+        ctx.submit_once(|cmd| {
+            for image in [&direct, &indirect, &gi] {
                 ctx.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
             }
-        });
-        match transitioned {
-            Ok(()) => Ok(outputs),
-            Err(e) => {
-                outputs.destroy(ctx);
-                Err(e)
-            }
-        }
+        })?;
+        Ok(NetworkOutputs { direct: direct.keep(), indirect: indirect.keep(), gi: gi.keep() })
     }
 
     pub fn all(&self) -> [&Image; 3] {
         [&self.direct, &self.indirect, &self.gi]
     }
+}
 
+impl Destroy for NetworkOutputs {
     fn destroy(self, ctx: &Context) {
         for image in [self.direct, self.indirect, self.gi] {
             ctx.destroy_image(image);
@@ -273,21 +254,19 @@ impl NetworkPass {
         gbuffer: &GBufferTargets,
         objects: &[Option<ObjectNetworks>],
     ) -> Result<Self> {
-        let outputs = NetworkOutputs::new(ctx, gbuffer.extent)?;
+        let outputs = ctx.guard(NetworkOutputs::new(ctx, gbuffer.extent)?);
         let kind = match variant {
-            Variant::Storage => storage(ctx, shaders.storage, gbuffer, &outputs, objects),
-            Variant::PerObject | Variant::Tiled => {
-                specialized(ctx, shaders, gbuffer, &outputs, objects, variant == Variant::Tiled)
-                    .map(|s| Kind::Specialized(Box::new(s)))
-            }
+            Variant::Storage => storage(ctx, shaders.storage, gbuffer, &outputs, objects)?,
+            Variant::PerObject | Variant::Tiled => Kind::Specialized(Box::new(specialized(
+                ctx,
+                shaders,
+                gbuffer,
+                &outputs,
+                objects,
+                variant == Variant::Tiled,
+            )?)),
         };
-        match kind {
-            Ok(kind) => Ok(NetworkPass { variant, extent: gbuffer.extent, outputs, kind }),
-            Err(e) => {
-                outputs.destroy(ctx);
-                Err(e)
-            }
-        }
+        Ok(NetworkPass { variant, extent: gbuffer.extent, outputs: outputs.keep(), kind })
     }
 
     pub fn variant(&self) -> Variant {
@@ -306,19 +285,12 @@ impl NetworkPass {
     /// pass keeps its old resources.
     pub fn resize(&mut self, ctx: &Context, gbuffer: &GBufferTargets) -> Result<()> {
         let extent = gbuffer.extent;
-        let outputs = NetworkOutputs::new(ctx, extent)?;
+        let outputs = ctx.guard(NetworkOutputs::new(ctx, extent)?);
         let tiles = match &self.kind {
-            Kind::Specialized(s) => match tile_buffer(ctx, s.object_count as usize, extent) {
-                Ok(tiles) => Some(tiles),
-                Err(e) => {
-                    outputs.destroy(ctx);
-                    return Err(e);
-                }
-            },
+            Kind::Specialized(s) => Some(tile_buffer(ctx, s.object_count as usize, extent)?),
             Kind::Storage { .. } => None,
         };
-        let old = std::mem::replace(&mut self.outputs, outputs);
-        old.destroy(ctx);
+        std::mem::replace(&mut self.outputs, outputs.keep()).destroy(ctx);
         self.extent = extent;
         match &mut self.kind {
             Kind::Storage { pass, weights } => pass.rebind(ctx, &network_bindings(gbuffer, weights, &self.outputs)),
@@ -403,16 +375,31 @@ impl NetworkPass {
                 pass.destroy(ctx);
                 ctx.destroy_buffer(weights);
             }
-            Kind::Specialized(s) => {
-                let s = *s;
-                s.classify.destroy(ctx);
-                s.networks.destroy(ctx);
-                for buffer in [s.trained, s.dispatch, s.tiles] {
-                    ctx.destroy_buffer(buffer);
-                }
-            }
+            Kind::Specialized(s) => s.destroy(ctx),
         }
         self.outputs.destroy(ctx);
+    }
+}
+
+impl Destroy for NetworkPass {
+    fn destroy(self, ctx: &Context) {
+        NetworkPass::destroy(self, ctx);
+    }
+}
+
+impl Destroy for Specialized {
+    fn destroy(self, ctx: &Context) {
+        self.classify.destroy(ctx);
+        self.networks.destroy(ctx);
+        for buffer in [self.trained, self.dispatch, self.tiles] {
+            ctx.destroy_buffer(buffer);
+        }
+    }
+}
+
+impl Destroy for Box<Specialized> {
+    fn destroy(self, ctx: &Context) {
+        (*self).destroy(ctx);
     }
 }
 
@@ -466,20 +453,15 @@ fn storage(
             weights.len() * 4
         )));
     }
-    let weights = ctx.create_buffer_with_data(
+    let weights = ctx.guard(ctx.create_buffer_with_data(
         "network weights",
         bytemuck::cast_slice(&weights),
         vk::BufferUsageFlags::STORAGE_BUFFER,
-    )?;
+    )?);
     let bindings = network_bindings(gbuffer, &weights, outputs);
     let push = std::mem::size_of::<StoragePush>() as u32;
-    match ComputePass::new(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE)) {
-        Ok(pass) => Ok(Kind::Storage { pass, weights }),
-        Err(e) => {
-            ctx.destroy_buffer(weights);
-            Err(e)
-        }
-    }
+    let pass = ComputePass::new(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE))?;
+    Ok(Kind::Storage { pass, weights: weights.keep() })
 }
 
 /// The tile lists of `objects` object ids at `extent`, and the tiles per object.
@@ -527,65 +509,43 @@ fn specialized(
 
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
     let (tiles, tile_capacity) = tile_buffer(ctx, objects.len(), gbuffer.extent)?;
-    // Everything made so far, destroyed if a later step fails.
-    let mut buffers = vec![tiles];
-    let made = (|| -> Result<(ComputePass, ComputePass)> {
-        buffers.push(ctx.create_buffer_with_data("network trained objects", pad(&trained), storage)?);
-        buffers.push(ctx.create_buffer(
-            "network dispatch",
-            pad(&dispatch_reset).len() as u64,
-            storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuOnly,
-        )?);
-        let [tiles, trained, dispatch] = [&buffers[0], &buffers[1], &buffers[2]];
-        let classify = ComputePass::new(
-            ctx,
-            "network tile classification",
-            shaders.classify,
-            &classify_bindings(gbuffer, trained, dispatch, tiles, outputs),
-            std::mem::size_of::<ClassifyPush>() as u32,
-            (TILE, TILE),
-        )?;
-        let networks = ComputePass::specialized(
-            ctx,
-            "network (specialization constants)",
-            shaders.specialized,
-            &network_bindings(gbuffer, tiles, outputs),
-            std::mem::size_of::<SpecializedPush>() as u32,
-            (TILE, TILE),
-            &specializations,
-        );
-        match networks {
-            Ok(networks) => Ok((classify, networks)),
-            Err(e) => {
-                classify.destroy(ctx);
-                Err(e)
-            }
-        }
-    })();
-    match made {
-        Ok((classify, networks)) => {
-            let [tiles, trained, dispatch]: [Buffer; 3] = buffers.try_into().ok().expect("three buffers");
-            Ok(Specialized {
-                classify,
-                networks,
-                objects: trained_ids,
-                object_count: objects.len() as u32,
-                tiled,
-                trained,
-                dispatch,
-                dispatch_reset,
-                tiles,
-                tile_capacity,
-            })
-        }
-        Err(e) => {
-            for buffer in buffers {
-                ctx.destroy_buffer(buffer);
-            }
-            Err(e)
-        }
-    }
+    let tiles = ctx.guard(tiles);
+    let trained = ctx.guard(ctx.create_buffer_with_data("network trained objects", pad(&trained), storage)?);
+    let dispatch = ctx.guard(ctx.create_buffer(
+        "network dispatch",
+        pad(&dispatch_reset).len() as u64,
+        storage | vk::BufferUsageFlags::INDIRECT_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )?);
+    let classify = ctx.guard(ComputePass::new(
+        ctx,
+        "network tile classification",
+        shaders.classify,
+        &classify_bindings(gbuffer, &trained, &dispatch, &tiles, outputs),
+        std::mem::size_of::<ClassifyPush>() as u32,
+        (TILE, TILE),
+    )?);
+    let networks = ComputePass::specialized(
+        ctx,
+        "network (specialization constants)",
+        shaders.specialized,
+        &network_bindings(gbuffer, &tiles, outputs),
+        std::mem::size_of::<SpecializedPush>() as u32,
+        (TILE, TILE),
+        &specializations,
+    )?;
+    Ok(Specialized {
+        classify: classify.keep(),
+        networks,
+        objects: trained_ids,
+        object_count: objects.len() as u32,
+        tiled,
+        trained: trained.keep(),
+        dispatch: dispatch.keep(),
+        dispatch_reset,
+        tiles: tiles.keep(),
+        tile_capacity,
+    })
 }
 
 /// `words` as bytes, with at least one word: Vulkan buffers cannot be empty.

@@ -8,6 +8,7 @@ use gpu_allocator::MemoryLocation;
 use crate::compute::{Bind, ComputePass};
 use crate::context::Context;
 use crate::error::Result;
+use crate::guard::Destroy;
 use crate::resources::{Buffer, Image};
 use crate::sync::{Access, Pass, Use};
 
@@ -96,33 +97,20 @@ impl OverlayPass {
             .iter()
             .flat_map(|g| [u32::from_le_bytes([g[0], g[1], g[2], g[3]]), u32::from_le_bytes([g[4], g[5], g[6], g[7]])])
             .collect();
-        let glyphs = ctx.create_buffer_with_data(
+        let glyphs = ctx.guard(ctx.create_buffer_with_data(
             "overlay glyphs",
             bytemuck::cast_slice(&words),
             vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
-        let text = ctx.create_buffer(
+        )?);
+        let text = ctx.guard(ctx.create_buffer(
             "overlay text",
             u64::from(COLUMNS * ROWS * 4),
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
-        );
-        let text = match text {
-            Ok(text) => text,
-            Err(e) => {
-                ctx.destroy_buffer(glyphs);
-                return Err(e);
-            }
-        };
+        )?);
         let bindings = [Bind::StorageImage(display), Bind::StorageBuffer(&glyphs), Bind::StorageBuffer(&text)];
-        match ComputePass::new(ctx, "overlay", spirv, &bindings, std::mem::size_of::<Push>() as u32, (8, 8)) {
-            Ok(pass) => Ok(OverlayPass { pass, glyphs, text }),
-            Err(e) => {
-                ctx.destroy_buffer(glyphs);
-                ctx.destroy_buffer(text);
-                Err(e)
-            }
-        }
+        let pass = ComputePass::new(ctx, "overlay", spirv, &bindings, std::mem::size_of::<Push>() as u32, (8, 8))?;
+        Ok(OverlayPass { pass, glyphs: glyphs.keep(), text: text.keep() })
     }
 
     /// Points the pass at another display image (after a resize); no frame that uses it may
@@ -163,6 +151,12 @@ impl OverlayPass {
         self.pass.destroy(ctx);
         ctx.destroy_buffer(self.glyphs);
         ctx.destroy_buffer(self.text);
+    }
+}
+
+impl Destroy for OverlayPass {
+    fn destroy(self, ctx: &Context) {
+        OverlayPass::destroy(self, ctx);
     }
 }
 

@@ -9,6 +9,7 @@ use gpu_allocator::MemoryLocation;
 
 use crate::context::Context;
 use crate::error::{Error, Result, VkContext};
+use crate::guard::Destroy;
 use crate::sync::{Access, Pass, Use};
 
 pub struct Buffer {
@@ -46,6 +47,18 @@ impl Image {
 
     pub fn pixel_count(&self) -> usize {
         self.extent.width as usize * self.extent.height as usize
+    }
+}
+
+impl Destroy for Buffer {
+    fn destroy(self, ctx: &Context) {
+        ctx.destroy_buffer(self);
+    }
+}
+
+impl Destroy for Image {
+    fn destroy(self, ctx: &Context) {
+        ctx.destroy_image(self);
     }
 }
 
@@ -95,6 +108,7 @@ impl Context {
     ) -> Result<Buffer> {
         let info =
             vk::BufferCreateInfo::default().size(size.max(4)).usage(usage).sharing_mode(vk::SharingMode::EXCLUSIVE);
+        self.step("vkCreateBuffer")?;
         // SAFETY: valid create info; the buffer is bound to memory before use.
         let raw = unsafe { self.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
@@ -111,10 +125,16 @@ impl Context {
                 unsafe { self.device.destroy_buffer(raw, None) };
                 Error::Allocation { name: name.to_string(), source }
             })?;
-        unsafe { self.device.bind_buffer_memory(raw, allocation.memory(), allocation.offset()) }
-            .vk("vkBindBufferMemory")?;
+        let buffer = Buffer { raw, size, allocation };
+        // SAFETY: the allocation was made for this buffer's requirements.
+        if let Err(e) =
+            unsafe { self.device.bind_buffer_memory(raw, buffer.allocation.memory(), buffer.allocation.offset()) }
+        {
+            self.destroy_buffer(buffer);
+            return Err(e).vk("vkBindBufferMemory");
+        }
         self.set_name(raw, name);
-        Ok(Buffer { raw, size, allocation })
+        Ok(buffer)
     }
 
     pub fn destroy_buffer(&self, buffer: Buffer) {
@@ -160,6 +180,7 @@ impl Context {
             .tiling(vk::ImageTiling::OPTIMAL)
             .usage(usage)
             .initial_layout(vk::ImageLayout::UNDEFINED);
+        self.step("vkCreateImage")?;
         // SAFETY: valid create info; memory is bound before the view is made.
         let raw = unsafe { self.device.create_image(&info, None) }.vk("vkCreateImage")?;
         let requirements = unsafe { self.device.get_image_memory_requirements(raw) };
@@ -176,26 +197,26 @@ impl Context {
                 unsafe { self.device.destroy_image(raw, None) };
                 Error::Allocation { name: name.to_string(), source }
             })?;
-        unsafe { self.device.bind_image_memory(raw, allocation.memory(), allocation.offset()) }
+        // Destroyed on every early return below; the view is null until it is made.
+        let mut image = self.guard(Image { raw, view: vk::ImageView::null(), format, extent, allocation });
+        // SAFETY: the allocation was made for this image's requirements.
+        unsafe { self.device.bind_image_memory(raw, image.allocation.memory(), image.allocation.offset()) }
             .vk("vkBindImageMemory")?;
         let viewable = vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::COLOR_ATTACHMENT
             | vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT;
-        let view = if usage.intersects(viewable) {
+        if usage.intersects(viewable) {
             let view_info = vk::ImageViewCreateInfo::default()
                 .image(raw)
                 .view_type(vk::ImageViewType::TYPE_2D)
                 .format(format)
                 .subresource_range(full_range(aspect_of(format)));
-            let view = unsafe { self.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
-            self.set_name(view, name);
-            view
-        } else {
-            vk::ImageView::null()
-        };
+            image.view = unsafe { self.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
+            self.set_name(image.view, name);
+        }
         self.set_name(raw, name);
-        Ok(Image { raw, view, format, extent, allocation })
+        Ok(image.keep())
     }
 
     pub fn destroy_image(&self, image: Image) {

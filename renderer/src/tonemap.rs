@@ -5,6 +5,7 @@ use ash::vk;
 use crate::compute::{Bind, ComputePass};
 use crate::context::Context;
 use crate::error::Result;
+use crate::guard::Destroy;
 use crate::resources::Image;
 use crate::sync::{Access, Pass, Use};
 
@@ -58,6 +59,12 @@ impl TonemapPass {
     }
 
     pub fn destroy(self, ctx: &Context) {
+        self.pass.destroy(ctx);
+    }
+}
+
+impl Destroy for TonemapPass {
+    fn destroy(self, ctx: &Context) {
         self.pass.destroy(ctx);
     }
 }

@@ -153,6 +153,9 @@ pub fn run(args: &ViewArgs) -> Result<()> {
             "no display to open a window on (DISPLAY and WAYLAND_DISPLAY are unset or unusable); rendering headless"
         );
     }
+    if event_loop.is_some() && !plan.scripted() && plan.screenshot.is_some() {
+        bail!("--screenshot saves the last frame of a run that ends by itself: add --frames N or --script FILE (in the window, P saves a screenshot)");
+    }
     if event_loop.is_none() && !plan.scripted() {
         plan.frames = Some(1);
         plan.screenshot.get_or_insert_with(|| PathBuf::from("view.png"));

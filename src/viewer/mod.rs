@@ -133,6 +133,11 @@ impl Session {
         Ok(requests)
     }
 
+    /// Whether the run is scripted or counted, so that it must go on even while unseen.
+    pub fn ends_by_itself(&self) -> bool {
+        self.plan.scripted()
+    }
+
     /// The `--stats` summary.
     pub fn summary(&self) -> serde_json::Value {
         self.stats.summary(self.frame)

@@ -62,14 +62,9 @@ pub struct Renderer {
 impl Renderer {
     /// The frame for `scene` at `extent`, with frames in flight.
     pub fn new(ctx: Context, scene: &Scene, model: &Model, variant: Variant, extent: vk::Extent2D) -> Result<Self> {
-        let frame = GpuFrame::new(&ctx, scene, model, variant, extent)?;
-        let ring = match FrameLoop::new(&ctx, TIMESTAMPS) {
-            Ok(ring) => ring,
-            Err(e) => {
-                frame.destroy(&ctx);
-                return Err(e.into());
-            }
-        };
+        let frame = ctx.guard(GpuFrame::new(&ctx, scene, model, variant, extent)?);
+        let ring = FrameLoop::new(&ctx, TIMESTAMPS)?;
+        let frame = frame.keep();
         let period_ns = ctx.info.limits.timestamp_period_ns.map(f64::from);
         Ok(Renderer { ctx, frame: Some(frame), ring: Some(ring), period_ns, saved: Rc::default() })
     }

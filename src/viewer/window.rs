@@ -56,6 +56,8 @@ struct App<'a> {
     window: Option<Window>,
     presenter: Option<Presenter>,
     looking: bool,
+    /// Whether the window is hidden (minimised or covered, where the platform says so).
+    occluded: bool,
     cursor: Option<(f64, f64)>,
     error: Option<anyhow::Error>,
 }
@@ -94,7 +96,7 @@ impl App<'_> {
         }
         if requests.quit {
             event_loop.exit();
-        } else {
+        } else if !self.occluded || self.session.ends_by_itself() {
             window.request_redraw();
         }
         Ok(())
@@ -157,6 +159,13 @@ impl ApplicationHandler for App<'_> {
             }
             WindowEvent::KeyboardInput { event, .. } => self.key(event_loop, &event),
             WindowEvent::Focused(false) => self.session.held.clear(),
+            // No frames while hidden; the loop sleeps until the window shows again.
+            WindowEvent::Occluded(hidden) => {
+                self.occluded = hidden;
+                if let (false, Some(w)) = (hidden, &self.window) {
+                    w.request_redraw();
+                }
+            }
             WindowEvent::MouseInput { button: MouseButton::Right, state, .. } => {
                 self.looking = state == ElementState::Pressed;
             }
@@ -199,6 +208,7 @@ pub fn run(
         window: None,
         presenter: None,
         looking: false,
+        occluded: false,
         cursor: None,
         error: None,
     };

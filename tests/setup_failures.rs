@@ -1,0 +1,85 @@
+//! Every error path of GPU set-up is clean: a frame whose set-up fails at any step, or whose
+//! resize fails at any step, leaves no GPU object alive and no validation message, and a failed
+//! resize leaves the frame usable at its old size.
+
+mod common;
+
+use std::path::Path;
+
+use common::{finish_clean, gpu};
+use rrf::gpu_frame::{FrameSettings, GpuFrame, Shown};
+use rrf_baker::model::Model;
+use rrf_baker::scene::Scene;
+use rrf_renderer::network_pass::Variant;
+use rrf_renderer::vk;
+
+fn cornell_box() -> (Scene, Model) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box");
+    let scene = Scene::load(&dir).unwrap();
+    let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
+    (scene, model)
+}
+
+const EXTENT: vk::Extent2D = vk::Extent2D { width: 48, height: 32 };
+
+#[test]
+fn a_frame_that_fails_at_any_set_up_step_leaves_nothing_behind() {
+    let (scene, model) = cornell_box();
+    for variant in [Variant::Tiled, Variant::Storage] {
+        let mut step = 0;
+        loop {
+            let ctx = gpu();
+            ctx.fail_at_step(Some(ctx.steps_taken() + step));
+            match GpuFrame::new(&ctx, &scene, &model, variant, EXTENT) {
+                Ok(frame) => {
+                    frame.destroy(&ctx);
+                    finish_clean(ctx);
+                    break;
+                }
+                Err(e) => {
+                    let message = format!("{e:#}");
+                    assert!(message.contains("device memory allocation has failed"), "step {step}: {message}");
+                    finish_clean(ctx);
+                    step += 1;
+                }
+            }
+        }
+        eprintln!("{}: set-up failed cleanly at each of its {step} steps", variant.name());
+        assert!(step >= 15, "{}: only {step} steps were tried", variant.name());
+    }
+}
+
+#[test]
+fn a_failed_resize_leaves_the_frame_usable_and_nothing_behind() {
+    let (scene, model) = cornell_box();
+    let ctx = gpu();
+    let mut frame = GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, EXTENT).unwrap();
+    let settings = FrameSettings {
+        view: scene.views[0].clone(),
+        light: scene.moving_light.as_ref().unwrap().default_position,
+        exposure_scale: 1.0,
+        shown: Shown::Gi,
+    };
+    let bigger = vk::Extent2D { width: 64, height: 40 };
+    let mut step = 0;
+    loop {
+        ctx.fail_at_step(Some(ctx.steps_taken() + step));
+        let resized = frame.resize(&ctx, bigger);
+        ctx.fail_at_step(None);
+        match resized {
+            Ok(()) => break,
+            Err(e) => {
+                assert!(format!("{e:#}").contains("device memory allocation has failed"));
+                assert_eq!(frame.extent(), EXTENT, "a failed resize keeps the old size");
+                let pixels = frame.render(&ctx, &settings).unwrap();
+                assert_eq!(pixels.gi.len(), 4 * (EXTENT.width * EXTENT.height) as usize);
+                step += 1;
+            }
+        }
+    }
+    assert!(step >= 5, "only {step} resize steps were tried");
+    assert_eq!(frame.extent(), bigger);
+    frame.render(&ctx, &settings).unwrap();
+    frame.destroy(&ctx);
+    finish_clean(ctx);
+}
