@@ -1,60 +1,6 @@
 #version 450
-// Network pass, step 1 of the specialized variants: sorts the image's 8×8 tiles by object.
-//
-// Each workgroup is one tile. It appends the tile to the list of every object with networks
-// that covers one of its pixels, counting in that object's indirect dispatch arguments, so
-// that each object's pipeline then runs only over its own tiles. Pixels that no network
-// covers (background, objects without networks) get their final values here.
+#extension GL_GOOGLE_include_directive : require
+// Tile classification for the network pass that writes the radiance images (rrf render,
+// eval, bench). See network_classify_main.glsl.
 
-layout(local_size_x = 8, local_size_y = 8) in;
-
-// Object ids the tile list can tell apart; the host checks a scene against it.
-#define MAX_OBJECTS 1024
-
-layout(binding = 0, r32ui) uniform readonly uimage2D gbuffer_object;
-layout(binding = 1, rgba32f) uniform readonly image2D gbuffer_emission;
-// 1 where object (id - 1) has networks.
-layout(binding = 2) readonly buffer Trained { uint trained[]; };
-// VkDispatchIndirectCommand per object: x counts its tiles; y and z are 1.
-layout(binding = 3) buffer Dispatch { uint dispatch[]; };
-// Object (id - 1)'s tiles from index (id - 1) * tile_capacity, each as x | y << 16.
-layout(binding = 4) writeonly buffer Tiles { uint tiles[]; };
-layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
-
-layout(push_constant) uniform Constants {
-    uint objects;
-    uint tile_capacity;
-} constants;
-
-shared uint seen[MAX_OBJECTS / 32];
-
-void main() {
-    uint lane = gl_LocalInvocationIndex;
-    for (uint word = lane; word < MAX_OBJECTS / 32; word += 64u) {
-        seen[word] = 0u;
-    }
-    barrier();
-
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (all(lessThan(pixel, imageSize(out_gi)))) {
-        uint id = imageLoad(gbuffer_object, pixel).r;
-        if (id > 0u && trained[id - 1u] != 0u) {
-            atomicOr(seen[(id - 1u) / 32u], 1u << ((id - 1u) % 32u));
-        } else {
-            imageStore(out_direct, pixel, vec4(0.0, 0.0, 0.0, 1.0));
-            imageStore(out_indirect, pixel, vec4(0.0, 0.0, 0.0, 1.0));
-            imageStore(out_gi, pixel, vec4(imageLoad(gbuffer_emission, pixel).rgb, 1.0));
-        }
-    }
-    barrier();
-
-    uint tile = gl_WorkGroupID.x | (gl_WorkGroupID.y << 16);
-    for (uint object = lane; object < constants.objects; object += 64u) {
-        if ((seen[object / 32u] & (1u << (object % 32u))) != 0u) {
-            uint slot = atomicAdd(dispatch[3u * object], 1u);
-            tiles[object * constants.tile_capacity + slot] = tile;
-        }
-    }
-}
+#include "network_classify_main.glsl"

@@ -16,7 +16,7 @@ use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets};
 use rrf_renderer::network_pass::{NetworkConstants, NetworkPass, NetworkShaders, ObjectNetworks, Variant};
 use rrf_renderer::overlay::{OverlayPass, TextGrid};
 use rrf_renderer::resources::read_back_passes;
-use rrf_renderer::sync::{run_passes, Pass, ResourceStates};
+use rrf_renderer::sync::{run_passes, Pass, Resource, ResourceStates};
 use rrf_renderer::tonemap::TonemapPass;
 use rrf_renderer::{vk, Context, Destroy, Image};
 
@@ -65,6 +65,15 @@ pub enum Shown {
 }
 
 impl Shown {
+    /// The shaders' code for it.
+    fn code(self) -> u32 {
+        match self {
+            Shown::Gi => 0,
+            Shown::Direct => 1,
+            Shown::Indirect => 2,
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Shown::Gi => "global",
@@ -72,6 +81,17 @@ impl Shown {
             Shown::Indirect => "indirect only",
         }
     }
+}
+
+/// What a frame writes besides the display image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameOutput {
+    /// Direct, indirect and global radiance (RGBA32F) for read-back, then the display image
+    /// tonemapped from one of them: `rrf render`, `eval`, `bench`.
+    Radiance,
+    /// Only the display image, written by the network pass itself: the walkthrough. The
+    /// storage variant, which cannot, falls back to `Radiance`.
+    Display,
 }
 
 /// What changes from frame to frame.
@@ -99,8 +119,9 @@ pub struct GpuFrame {
     /// Display-referred image (RGBA8, sRGB-encoded): what the tonemap pass writes, the overlay
     /// draws on, the window shows and screenshots save.
     ldr: Image,
-    /// Tonemap passes of the global, direct and indirect images.
-    tonemaps: [TonemapPass; 3],
+    /// Tonemap passes of the global, direct and indirect images (none when the network pass
+    /// writes the display image itself).
+    tonemaps: Vec<TonemapPass>,
     overlay: OverlayPass,
     /// Where the glTF puts the moving light.
     default_light: Vec3,
@@ -110,8 +131,16 @@ pub struct GpuFrame {
 }
 
 impl GpuFrame {
-    /// Everything for frames of `scene` at `extent` with network pass `variant`.
-    pub fn new(ctx: &Context, scene: &Scene, model: &Model, variant: Variant, extent: vk::Extent2D) -> Result<Self> {
+    /// Everything for frames of `scene` at `extent` with network pass `variant`, writing
+    /// `output`.
+    pub fn new(
+        ctx: &Context,
+        scene: &Scene,
+        model: &Model,
+        variant: Variant,
+        extent: vk::Extent2D,
+        output: FrameOutput,
+    ) -> Result<Self> {
         // Each part is destroyed again if a later one cannot be made.
         let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
         let mesh = ctx.guard(GBufferMesh::new(ctx, &gbuffer_vertices(scene))?);
@@ -120,12 +149,15 @@ impl GpuFrame {
             storage: shaders::NETWORK_STORAGE_COMP,
             classify: shaders::NETWORK_CLASSIFY_COMP,
             specialized: shaders::NETWORK_SPECIALIZED_COMP,
+            classify_display: shaders::NETWORK_CLASSIFY_DISPLAY_COMP,
+            specialized_display: shaders::NETWORK_DISPLAY_COMP,
         };
         let objects = object_networks(scene, model);
-        let network = ctx.guard(NetworkPass::new(ctx, variant, &network_shaders, &targets, &objects)?);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
+        let display = (output == FrameOutput::Display && variant != Variant::Storage).then_some(&*ldr);
+        let network = ctx.guard(NetworkPass::new(ctx, variant, &network_shaders, &targets, &objects, display)?);
         let mut tonemaps = ctx.guard(Vec::with_capacity(3));
-        for hdr in [&network.outputs.gi, &network.outputs.direct, &network.outputs.indirect] {
+        for hdr in network.outputs().into_iter().flat_map(|o| [&o.gi, &o.direct, &o.indirect]) {
             tonemaps.push(TonemapPass::new(ctx, shaders::TONEMAP_COMP, hdr, &ldr)?);
         }
         let overlay = OverlayPass::new(ctx, shaders::OVERLAY_COMP, &font8x8::legacy::BASIC_LEGACY, &ldr)?;
@@ -135,7 +167,7 @@ impl GpuFrame {
             gbuffer: gbuffer.keep(),
             network: network.keep(),
             ldr: ldr.keep(),
-            tonemaps: tonemaps.keep().try_into().ok().expect("three tonemap passes"),
+            tonemaps: tonemaps.keep(),
             overlay,
             default_light: scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position),
             light_object: moving_light_object(scene),
@@ -175,11 +207,12 @@ impl GpuFrame {
         }
         let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
-        self.network.resize(ctx, &targets)?;
+        let display = self.network.outputs().is_none().then_some(&*ldr);
+        self.network.resize(ctx, &targets, display)?;
         std::mem::replace(&mut self.targets, targets.keep()).destroy(ctx);
         ctx.destroy_image(std::mem::replace(&mut self.ldr, ldr.keep()));
-        let outputs = &self.network.outputs;
-        for (pass, hdr) in self.tonemaps.iter().zip([&outputs.gi, &outputs.direct, &outputs.indirect]) {
+        let hdr = self.network.outputs().into_iter().flat_map(|o| [&o.gi, &o.direct, &o.indirect]);
+        for (pass, hdr) in self.tonemaps.iter().zip(hdr) {
             pass.rebind(ctx, hdr, &self.ldr);
         }
         self.overlay.rebind(ctx, &self.ldr);
@@ -199,11 +232,46 @@ impl GpuFrame {
         overlay: Option<(&TextGrid, u32)>,
         timestamps: Option<vk::QueryPool>,
         extra: Vec<Pass<'a>>,
-    ) {
+    ) -> Result<()> {
+        let passes = self.passes(ctx, settings, overlay, timestamps, extra)?;
+        if let Some(pool) = timestamps {
+            // SAFETY: the pool holds TIMESTAMPS queries and was reset for this frame.
+            unsafe { ctx.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool, 0) };
+        }
+        run_passes(ctx, cmd, &mut self.states.borrow_mut(), passes);
+        Ok(())
+    }
+
+    /// Image bytes a frame moves per pixel, from what its passes declare (without overlay or
+    /// read-back): each declared image access counted as one read or write of every pixel, so
+    /// an upper bound where a pass touches only some pixels (the classification's background).
+    pub fn bytes_per_pixel(&self, ctx: &Context, settings: &FrameSettings) -> Result<u32> {
+        let passes = self.passes(ctx, settings, None, None, vec![])?;
+        let bytes = passes.iter().flat_map(|p| &p.uses).map(|u| match u.resource {
+            Resource::Image { texel_bytes, .. } => texel_bytes,
+            Resource::Buffer(_) => 0,
+        });
+        Ok(bytes.sum())
+    }
+
+    /// The passes of a frame, for `record`.
+    fn passes<'a>(
+        &'a self,
+        ctx: &'a Context,
+        settings: &FrameSettings,
+        overlay: Option<(&TextGrid, u32)>,
+        timestamps: Option<vk::QueryPool>,
+        extra: Vec<Pass<'a>>,
+    ) -> Result<Vec<Pass<'a>>> {
         let extent = self.extent();
         let aspect = extent.width as f32 / extent.height as f32;
         let g = gbuffer_constants(&settings.view, aspect, settings.light - self.default_light, self.light_object);
-        let n = NetworkConstants { eye: g.eye, light: settings.light.extend(1.0).to_array() };
+        let n = NetworkConstants {
+            eye: g.eye,
+            light: settings.light.extend(1.0).to_array(),
+            exposure_scale: settings.exposure_scale,
+            shown: settings.shown.code(),
+        };
         let mut passes = vec![self.gbuffer.pass(ctx, &self.targets, &self.mesh, g)];
         let stamp = |passes: &mut Vec<Pass>, index: u32| {
             if let (Some(pool), Some(last)) = (timestamps, passes.last_mut()) {
@@ -211,15 +279,19 @@ impl GpuFrame {
             }
         };
         stamp(&mut passes, 1);
-        passes.extend(self.network.passes(ctx, &self.targets, n));
+        let display = self.network.outputs().is_none().then_some(&self.ldr);
+        passes.extend(self.network.passes(ctx, &self.targets, n, display)?);
         stamp(&mut passes, 2);
-        let outputs = &self.network.outputs;
-        let (tonemap, hdr) = match settings.shown {
-            Shown::Gi => (&self.tonemaps[0], &outputs.gi),
-            Shown::Direct => (&self.tonemaps[1], &outputs.direct),
-            Shown::Indirect => (&self.tonemaps[2], &outputs.indirect),
-        };
-        passes.push(tonemap.pass(ctx, hdr, &self.ldr, settings.exposure_scale));
+        if let Some(outputs) = self.network.outputs() {
+            let (tonemap, hdr) = match settings.shown {
+                Shown::Gi => (&self.tonemaps[0], &outputs.gi),
+                Shown::Direct => (&self.tonemaps[1], &outputs.direct),
+                Shown::Indirect => (&self.tonemaps[2], &outputs.indirect),
+            };
+            passes.push(tonemap.pass(ctx, hdr, &self.ldr, settings.exposure_scale));
+        }
+        // The tonemap interval ends here even when the network pass did its work.
+        passes.push(Pass::new("tonemap done", vec![], |_| {}));
         stamp(&mut passes, 3);
         if let Some((grid, scale)) = overlay {
             passes.extend(self.overlay.passes(ctx, &self.ldr, grid, scale));
@@ -228,16 +300,14 @@ impl GpuFrame {
         passes.extend(extra);
         passes.push(Pass::new("end of frame", vec![], |_| {}));
         stamp(&mut passes, 4);
-        if let Some(pool) = timestamps {
-            // SAFETY: the pool holds TIMESTAMPS queries and was reset for this frame.
-            unsafe { ctx.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool, 0) };
-        }
-        run_passes(ctx, cmd, &mut self.states.borrow_mut(), passes);
+        Ok(passes)
     }
 
     /// Renders one frame and reads the HDR images back.
     pub fn render(&self, ctx: &Context, settings: &FrameSettings) -> Result<FramePixels> {
-        let outputs = &self.network.outputs;
+        let Some(outputs) = self.network.outputs() else {
+            anyhow::bail!("this frame writes only its display image (FrameOutput::Display); it has no radiance to read")
+        };
         let images = [&outputs.direct, &outputs.indirect, &outputs.gi];
         let mut buffers = Vec::new();
         let read = (|| {
@@ -246,8 +316,8 @@ impl GpuFrame {
             }
             ctx.submit_once(|cmd| {
                 let extra = images.iter().zip(&buffers).flat_map(|(i, b)| read_back_passes(ctx, i, b)).collect();
-                self.record(ctx, cmd, settings, None, None, extra);
-            })?;
+                self.record(ctx, cmd, settings, None, None, extra)
+            })??;
             let decode = |i: usize| ctx.decode(images[i].format, &buffers[i]);
             Ok(FramePixels { direct: decode(0)?, indirect: decode(1)?, gi: decode(2)? })
         })();
@@ -255,6 +325,16 @@ impl GpuFrame {
             ctx.destroy_buffer(buffer);
         }
         read
+    }
+
+    /// Renders one frame and reads the display image back: RGBA in [0, 1], sRGB-encoded.
+    pub fn render_display(&self, ctx: &Context, settings: &FrameSettings) -> Result<Vec<f32>> {
+        let buffer = ctx.guard(ctx.create_readback_buffer(&self.ldr)?);
+        ctx.submit_once(|cmd| {
+            let extra = read_back_passes(ctx, &self.ldr, &buffer).into();
+            self.record(ctx, cmd, settings, None, None, extra)
+        })??;
+        Ok(ctx.decode(self.ldr.format, &buffer)?)
     }
 
     /// Object ids + 1 of the last frame's pixels (0: nothing).

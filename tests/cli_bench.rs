@@ -1,5 +1,5 @@
-//! `rrf bench --json`: one line per variant with the fields the issue names. It times
-//! nothing here; it only checks that the figures are there and sane.
+//! `rrf bench --json`: one line per variant and frame output with the fields the issues name.
+//! It times nothing here; it only checks that the figures are there and sane.
 
 mod common;
 
@@ -13,24 +13,34 @@ fn bench_prints_the_figures() {
     );
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8(out.stdout).unwrap();
-    let mut variants = Vec::new();
+    let mut runs = Vec::new();
+    let mut bytes = std::collections::HashMap::new();
     for line in stdout.lines() {
         let row: serde_json::Value = serde_json::from_str(line).unwrap();
         assert!(row["device"].as_str().unwrap().contains("llvmpipe"));
-        variants.push(row["variant"].as_str().unwrap().to_string());
+        let run = format!("{} {}", row["variant"].as_str().unwrap(), row["output"].as_str().unwrap());
+        bytes.insert(run.clone(), row["bytes_per_pixel"].as_u64().unwrap());
+        runs.push(run);
         assert_eq!(
             (row["width"].as_u64(), row["height"].as_u64(), row["frames"].as_u64()),
             (Some(32), Some(32), Some(2))
         );
-        for key in ["gbuffer_ms", "network_ms", "tonemap_ms", "frame_ms", "network_pixels_per_s", "peak_fraction"] {
+        for key in ["gbuffer_ms", "network_ms", "frame_ms", "network_pixels_per_s", "peak_fraction"] {
             let v = row[key].as_f64().unwrap_or_else(|| panic!("{key} missing in {row}"));
             assert!(v.is_finite() && v > 0.0, "{key} = {v}");
         }
+        // The display frame has no tonemap pass of its own: its interval may be empty.
+        let tonemap = row["tonemap_ms"].as_f64().unwrap();
+        assert!(tonemap.is_finite() && tonemap >= 0.0, "tonemap_ms = {tonemap}");
         // Two networks per pixel that shows a trained object: most of the frame.
         let evaluations = row["networks_per_frame"].as_u64().unwrap();
         assert!(evaluations > 1000 && evaluations <= 2 * 32 * 32, "{evaluations}");
     }
-    assert_eq!(variants, ["tiled", "per-object", "storage"], "--variant all by default");
+    let expected = ["tiled", "per-object", "storage"].map(|v| [format!("{v} radiance"), format!("{v} display")]);
+    assert_eq!(runs, expected.concat(), "--variant all and --output both by default");
+    // The display frame writes one RGBA8 image instead of three RGBA32F ones and a tonemap.
+    assert!(bytes["tiled display"] < bytes["tiled radiance"], "{bytes:?}");
+    assert_eq!(bytes["storage display"], bytes["storage radiance"], "storage falls back to radiance: {bytes:?}");
 }
 
 #[test]

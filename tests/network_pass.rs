@@ -6,13 +6,14 @@ mod common;
 use std::path::Path;
 
 use common::{finish_clean, gpu};
-use rrf::gpu_frame::{FrameSettings, GpuFrame, Shown};
+use rrf::gpu_frame::{FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
 use rrf_baker::scene::Scene;
 use rrf_baker::trace::{Camera, Geometry, Radiance, World};
 use rrf_renderer::network_pass::Variant;
+use rrf_renderer::tonemap::tonemap;
 use rrf_renderer::vk;
 
 /// One component of the CPU's radiance.
@@ -33,7 +34,7 @@ fn compare(scene_name: &str, view_name: &str, light: Vec3, width: u32, height: u
             // One frame serves every configuration: it starts at another size with the light
             // where the glTF puts it, then is resized and the light moved.
             let start = vk::Extent2D { width: width / 2 + 3, height: height / 2 + 1 };
-            let mut frame = GpuFrame::new(&ctx, &scene, &model, variant, start).unwrap();
+            let mut frame = GpuFrame::new(&ctx, &scene, &model, variant, start, FrameOutput::Radiance).unwrap();
             let mut settings =
                 FrameSettings { view: view.clone(), light: default_light, exposure_scale: 1.0, shown: Shown::Gi };
             frame.render(&ctx, &settings).unwrap();
@@ -88,4 +89,49 @@ fn gpu_matches_cpu_inference_cornell_box() {
 #[test]
 fn gpu_matches_cpu_inference_many_objects() {
     compare("many-objects", "table", Vec3::new(0.8, 2.2, -0.5), 120, 80);
+}
+
+/// The display frame (the walkthrough's: the network pass tonemaps and writes the display
+/// image itself) against the radiance frame tonemapped on the CPU, every component.
+#[test]
+fn display_frame_matches_the_tonemapped_radiance() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy-room");
+    let scene = Scene::load(&dir).unwrap();
+    let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
+    let extent = vk::Extent2D { width: 96, height: 64 };
+    let ctx = gpu();
+    let radiance = GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance).unwrap();
+    for variant in [Variant::Tiled, Variant::PerObject] {
+        let display = GpuFrame::new(&ctx, &scene, &model, variant, extent, FrameOutput::Display).unwrap();
+        for shown in [Shown::Gi, Shown::Direct, Shown::Indirect] {
+            let settings = FrameSettings {
+                view: scene.views[0].clone(),
+                light: scene.moving_light.as_ref().unwrap().default_position,
+                exposure_scale: 1.5,
+                shown,
+            };
+            let hdr = radiance.render(&ctx, &settings).unwrap();
+            let hdr = match shown {
+                Shown::Gi => hdr.gi,
+                Shown::Direct => hdr.direct,
+                Shown::Indirect => hdr.indirect,
+            };
+            let shown_ldr = display.render_display(&ctx, &settings).unwrap();
+            let mut off = 0;
+            for (h, d) in hdr.chunks_exact(4).zip(shown_ldr.chunks_exact(4)) {
+                let expected = tonemap([h[0], h[1], h[2]], settings.exposure_scale);
+                let worst = (0..3).map(|c| (expected[c] - d[c]).abs()).fold(0.0, f32::max);
+                off += usize::from(worst > 1.5 / 255.0);
+            }
+            let n = (extent.width * extent.height) as usize;
+            assert!(
+                off * 1000 <= n,
+                "{} {shown:?}: {off} of {n} pixels differ by more than 1.5 levels",
+                variant.name()
+            );
+        }
+        display.destroy(&ctx);
+    }
+    radiance.destroy(&ctx);
+    finish_clean(ctx);
 }

@@ -70,6 +70,9 @@ pub struct NetworkShaders<'a> {
     pub storage: &'a [u32],
     pub classify: &'a [u32],
     pub specialized: &'a [u32],
+    /// The same two steps writing one tonemapped display image.
+    pub classify_display: &'a [u32],
+    pub specialized_display: &'a [u32],
 }
 
 /// One object's two networks, as the baker trained them.
@@ -148,11 +151,16 @@ fn specialization(id: usize, n: &ObjectNetworks, tiled: bool) -> Specialization 
     words
 }
 
-/// Camera and light, as every variant's shader reads them.
+/// Camera and light, as every variant's shader reads them, and for a pass that writes a
+/// display image, how to show it.
 #[derive(Clone, Copy, Debug)]
 pub struct NetworkConstants {
     pub eye: [f32; 4],
     pub light: [f32; 4],
+    /// 2^EV.
+    pub exposure_scale: f32,
+    /// The component shown: 0 global, 1 direct, 2 indirect.
+    pub shown: u32,
 }
 
 #[repr(C)]
@@ -168,7 +176,9 @@ struct SpecializedPush {
     eye: [f32; 4],
     light: [f32; 4],
     tile_capacity: u32,
-    pad: [u32; 3],
+    exposure_scale: f32,
+    shown: u32,
+    pad: u32,
 }
 
 #[repr(C)]
@@ -176,6 +186,8 @@ struct SpecializedPush {
 struct ClassifyPush {
     objects: u32,
     tile_capacity: u32,
+    exposure_scale: f32,
+    shown: u32,
 }
 
 /// HDR outputs of the network pass, in `GENERAL` layout.
@@ -213,10 +225,27 @@ impl Destroy for NetworkOutputs {
     }
 }
 
+/// What the pass writes: the radiance images it owns, or a display image it is given.
+#[derive(Clone, Copy)]
+enum Written<'a> {
+    Radiance(&'a NetworkOutputs),
+    Display(&'a Image),
+}
+
+impl<'a> Written<'a> {
+    fn images(self) -> Vec<&'a Image> {
+        match self {
+            Written::Radiance(o) => o.all().to_vec(),
+            Written::Display(image) => vec![image],
+        }
+    }
+}
+
 pub struct NetworkPass {
     variant: Variant,
     extent: vk::Extent2D,
-    pub outputs: NetworkOutputs,
+    /// The radiance images; `None` when the pass writes a display image instead.
+    outputs: Option<NetworkOutputs>,
     kind: Kind,
 }
 
@@ -246,27 +275,57 @@ struct Specialized {
 
 impl NetworkPass {
     /// The pass for `objects` (by object id; `None` for objects without networks), which
-    /// reads `gbuffer`.
+    /// reads `gbuffer`. With `display` (an RGBA8 storage image of the G-buffer's size), the
+    /// pass writes only that: the component shown, tonemapped, as a window shows it; the
+    /// storage variant cannot.
     pub fn new(
         ctx: &Context,
         variant: Variant,
         shaders: &NetworkShaders,
         gbuffer: &GBufferTargets,
         objects: &[Option<ObjectNetworks>],
+        display: Option<&Image>,
     ) -> Result<Self> {
-        let outputs = ctx.guard(NetworkOutputs::new(ctx, gbuffer.extent)?);
+        let outputs = match display {
+            Some(_) => None,
+            None => Some(NetworkOutputs::new(ctx, gbuffer.extent)?),
+        };
+        let outputs = ctx.guard(outputs);
+        let written = match (display, outputs.as_ref()) {
+            (Some(image), _) => Written::Display(image),
+            (None, Some(o)) => Written::Radiance(o),
+            (None, None) => unreachable!("outputs are made when there is no display image"),
+        };
         let kind = match variant {
-            Variant::Storage => storage(ctx, shaders.storage, gbuffer, &outputs, objects)?,
+            Variant::Storage => match written {
+                Written::Radiance(o) => storage(ctx, shaders.storage, gbuffer, o, objects)?,
+                Written::Display(_) => {
+                    return Err(Error::Invalid("the storage network variant cannot write a display image".into()))
+                }
+            },
             Variant::PerObject | Variant::Tiled => Kind::Specialized(Box::new(specialized(
                 ctx,
                 shaders,
                 gbuffer,
-                &outputs,
+                written,
                 objects,
                 variant == Variant::Tiled,
             )?)),
         };
         Ok(NetworkPass { variant, extent: gbuffer.extent, outputs: outputs.keep(), kind })
+    }
+
+    /// The radiance images, unless the pass writes a display image.
+    pub fn outputs(&self) -> Option<&NetworkOutputs> {
+        self.outputs.as_ref()
+    }
+
+    fn written<'a>(&'a self, display: Option<&'a Image>) -> Result<Written<'a>> {
+        match (&self.outputs, display) {
+            (Some(o), None) => Ok(Written::Radiance(o)),
+            (None, Some(image)) => Ok(Written::Display(image)),
+            _ => Err(Error::Invalid("a display image goes with, and only with, a display network pass".into())),
+        }
     }
 
     pub fn variant(&self) -> Variant {
@@ -275,45 +334,63 @@ impl NetworkPass {
 
     /// Records where `new` and `resize` left the outputs.
     pub fn register(&self, states: &mut ResourceStates) {
-        for image in self.outputs.all() {
+        for image in self.outputs.iter().flat_map(|o| o.all()) {
             states.set_layout(image, vk::ImageLayout::GENERAL);
         }
     }
 
-    /// Remakes the size-dependent resources for `gbuffer`'s new size and points the pipelines
-    /// at them; the pipelines stay. No frame that uses the pass may be pending. On failure the
-    /// pass keeps its old resources.
-    pub fn resize(&mut self, ctx: &Context, gbuffer: &GBufferTargets) -> Result<()> {
+    /// Remakes the size-dependent resources for `gbuffer`'s new size (and `display`, the
+    /// display image of that size for a display pass) and points the pipelines at them; the
+    /// pipelines stay. No frame that uses the pass may be pending. On failure the pass keeps
+    /// its old resources.
+    pub fn resize(&mut self, ctx: &Context, gbuffer: &GBufferTargets, display: Option<&Image>) -> Result<()> {
+        self.written(display)?;
         let extent = gbuffer.extent;
-        let outputs = ctx.guard(NetworkOutputs::new(ctx, extent)?);
+        let outputs = match &self.outputs {
+            Some(_) => Some(NetworkOutputs::new(ctx, extent)?),
+            None => None,
+        };
+        let outputs = ctx.guard(outputs);
         let tiles = match &self.kind {
             Kind::Specialized(s) => Some(tile_buffer(ctx, s.object_count as usize, extent)?),
             Kind::Storage { .. } => None,
         };
         std::mem::replace(&mut self.outputs, outputs.keep()).destroy(ctx);
         self.extent = extent;
+        let written = match (&self.outputs, display) {
+            (Some(o), _) => Written::Radiance(o),
+            (None, Some(image)) => Written::Display(image),
+            (None, None) => unreachable!("checked by `written` above"),
+        };
         match &mut self.kind {
-            Kind::Storage { pass, weights } => pass.rebind(ctx, &network_bindings(gbuffer, weights, &self.outputs)),
+            Kind::Storage { pass, weights } => pass.rebind(ctx, &network_bindings(gbuffer, weights, written)),
             Kind::Specialized(s) => {
                 if let Some((tiles, capacity)) = tiles {
                     ctx.destroy_buffer(std::mem::replace(&mut s.tiles, tiles));
                     s.tile_capacity = capacity;
                 }
-                s.classify.rebind(ctx, &classify_bindings(gbuffer, &s.trained, &s.dispatch, &s.tiles, &self.outputs));
-                s.networks.rebind(ctx, &network_bindings(gbuffer, &s.tiles, &self.outputs));
+                s.classify.rebind(ctx, &classify_bindings(gbuffer, &s.trained, &s.dispatch, &s.tiles, written));
+                s.networks.rebind(ctx, &network_bindings(gbuffer, &s.tiles, written));
             }
         }
         Ok(())
     }
 
-    /// The pass's steps for a frame list. The G-buffer must be the one the pass was made
-    /// (or last resized) for.
-    pub fn passes<'a>(&'a self, ctx: &'a Context, gbuffer: &'a GBufferTargets, c: NetworkConstants) -> Vec<Pass<'a>> {
+    /// The pass's steps for a frame list. The G-buffer (and for a display pass, `display`)
+    /// must be the ones the pass was made or last resized for.
+    pub fn passes<'a>(
+        &'a self,
+        ctx: &'a Context,
+        gbuffer: &'a GBufferTargets,
+        c: NetworkConstants,
+        display: Option<&'a Image>,
+    ) -> Result<Vec<Pass<'a>>> {
         let extent = self.extent;
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let g = [&gbuffer.position, &gbuffer.normal, &gbuffer.object, &gbuffer.emission];
-        let writes = self.outputs.all().map(|image| Use::image(image, Access::COMPUTE_WRITE));
-        match &self.kind {
+        let writes: Vec<Use> =
+            self.written(display)?.images().into_iter().map(|image| Use::image(image, Access::COMPUTE_WRITE)).collect();
+        Ok(match &self.kind {
             Kind::Storage { pass, weights } => {
                 let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
                 uses.push(Use::buffer(weights, Access::COMPUTE_READ));
@@ -347,8 +424,13 @@ impl NetworkPass {
                     Use::buffer(&s.dispatch, Access::COMPUTE_READ_WRITE),
                     Use::buffer(&s.tiles, Access::COMPUTE_WRITE),
                 ];
-                uses.extend(writes);
-                let push = ClassifyPush { objects: s.object_count, tile_capacity: s.tile_capacity };
+                uses.extend(writes.iter().copied());
+                let push = ClassifyPush {
+                    objects: s.object_count,
+                    tile_capacity: s.tile_capacity,
+                    exposure_scale: c.exposure_scale,
+                    shown: c.shown,
+                };
                 let classify = Pass::new("network tile classification", uses, move |cmd| {
                     s.classify.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
                 });
@@ -366,7 +448,7 @@ impl NetworkPass {
                 }
                 passes
             }
-        }
+        })
     }
 
     pub fn destroy(self, ctx: &Context) {
@@ -403,39 +485,37 @@ impl Destroy for Box<Specialized> {
     }
 }
 
-/// The bindings `network_storage.comp` and `network_specialized.comp` share: the G-buffer,
-/// the variant's buffer (weights or tile lists), then the outputs.
-fn network_bindings<'a>(gbuffer: &'a GBufferTargets, buffer: &'a Buffer, outputs: &'a NetworkOutputs) -> [Bind<'a>; 8] {
-    [
+/// The bindings `network_storage.comp` and `network_specialized_main.glsl` share: the
+/// G-buffer, the variant's buffer (weights or tile lists), then what the pass writes.
+fn network_bindings<'a>(gbuffer: &'a GBufferTargets, buffer: &'a Buffer, written: Written<'a>) -> Vec<Bind<'a>> {
+    let mut binds = vec![
         Bind::StorageImage(&gbuffer.position),
         Bind::StorageImage(&gbuffer.normal),
         Bind::StorageImage(&gbuffer.object),
         Bind::StorageImage(&gbuffer.emission),
         Bind::StorageBuffer(buffer),
-        Bind::StorageImage(&outputs.direct),
-        Bind::StorageImage(&outputs.indirect),
-        Bind::StorageImage(&outputs.gi),
-    ]
+    ];
+    binds.extend(written.images().into_iter().map(Bind::StorageImage));
+    binds
 }
 
-/// The bindings of `network_classify.comp`.
+/// The bindings of `network_classify_main.glsl`.
 fn classify_bindings<'a>(
     gbuffer: &'a GBufferTargets,
     trained: &'a Buffer,
     dispatch: &'a Buffer,
     tiles: &'a Buffer,
-    outputs: &'a NetworkOutputs,
-) -> [Bind<'a>; 8] {
-    [
+    written: Written<'a>,
+) -> Vec<Bind<'a>> {
+    let mut binds = vec![
         Bind::StorageImage(&gbuffer.object),
         Bind::StorageImage(&gbuffer.emission),
         Bind::StorageBuffer(trained),
         Bind::StorageBuffer(dispatch),
         Bind::StorageBuffer(tiles),
-        Bind::StorageImage(&outputs.direct),
-        Bind::StorageImage(&outputs.indirect),
-        Bind::StorageImage(&outputs.gi),
-    ]
+    ];
+    binds.extend(written.images().into_iter().map(Bind::StorageImage));
+    binds
 }
 
 fn storage(
@@ -458,7 +538,7 @@ fn storage(
         bytemuck::cast_slice(&weights),
         vk::BufferUsageFlags::STORAGE_BUFFER,
     )?);
-    let bindings = network_bindings(gbuffer, &weights, outputs);
+    let bindings = network_bindings(gbuffer, &weights, Written::Radiance(outputs));
     let push = std::mem::size_of::<StoragePush>() as u32;
     let pass = ComputePass::new(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE))?;
     Ok(Kind::Storage { pass, weights: weights.keep() })
@@ -485,10 +565,14 @@ fn specialized(
     ctx: &Context,
     shaders: &NetworkShaders,
     gbuffer: &GBufferTargets,
-    outputs: &NetworkOutputs,
+    written: Written,
     objects: &[Option<ObjectNetworks>],
     tiled: bool,
 ) -> Result<Specialized> {
+    let (classify_spirv, specialized_spirv) = match written {
+        Written::Radiance(_) => (shaders.classify, shaders.specialized),
+        Written::Display(_) => (shaders.classify_display, shaders.specialized_display),
+    };
     if objects.len() > MAX_OBJECTS {
         return Err(Error::Invalid(format!(
             "{} objects; the specialized network variants handle at most {MAX_OBJECTS} (use --variant storage)",
@@ -520,16 +604,16 @@ fn specialized(
     let classify = ctx.guard(ComputePass::new(
         ctx,
         "network tile classification",
-        shaders.classify,
-        &classify_bindings(gbuffer, &trained, &dispatch, &tiles, outputs),
+        classify_spirv,
+        &classify_bindings(gbuffer, &trained, &dispatch, &tiles, written),
         std::mem::size_of::<ClassifyPush>() as u32,
         (TILE, TILE),
     )?);
     let networks = ComputePass::specialized(
         ctx,
         "network (specialization constants)",
-        shaders.specialized,
-        &network_bindings(gbuffer, &tiles, outputs),
+        specialized_spirv,
+        &network_bindings(gbuffer, &tiles, written),
         std::mem::size_of::<SpecializedPush>() as u32,
         (TILE, TILE),
         &specializations,
@@ -557,7 +641,14 @@ fn pad(words: &[u32]) -> &[u8] {
 impl Specialized {
     /// The per-object dispatches. Each writes only its own object's pixels of the outputs.
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, c: NetworkConstants) {
-        let push = SpecializedPush { eye: c.eye, light: c.light, tile_capacity: self.tile_capacity, pad: [0; 3] };
+        let push = SpecializedPush {
+            eye: c.eye,
+            light: c.light,
+            tile_capacity: self.tile_capacity,
+            exposure_scale: c.exposure_scale,
+            shown: c.shown,
+            pad: 0,
+        };
         for (index, &id) in self.objects.iter().enumerate() {
             let dispatch = if self.tiled {
                 Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * id as u64 }

@@ -45,6 +45,17 @@ impl Image {
         aspect_of(self.format)
     }
 
+    /// Bytes per texel of the formats rrf uses (0 for others).
+    pub fn texel_bytes(&self) -> u32 {
+        match self.format {
+            vk::Format::R32G32B32A32_SFLOAT => 16,
+            vk::Format::R16G16B16A16_SFLOAT => 8,
+            vk::Format::R32_SFLOAT | vk::Format::R32_UINT | vk::Format::D32_SFLOAT => 4,
+            vk::Format::R8G8B8A8_UNORM | vk::Format::B8G8R8A8_UNORM => 4,
+            _ => 0,
+        }
+    }
+
     pub fn pixel_count(&self) -> usize {
         self.extent.width as usize * self.extent.height as usize
     }

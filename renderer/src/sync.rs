@@ -107,13 +107,19 @@ impl Access {
 /// A resource as the barrier code sees it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Resource {
-    Image { raw: vk::Image, aspect: vk::ImageAspectFlags },
+    /// An image, its aspect, and its texel size in bytes (0 where unknown, as for swapchain
+    /// images), for traffic estimates.
+    Image {
+        raw: vk::Image,
+        aspect: vk::ImageAspectFlags,
+        texel_bytes: u32,
+    },
     Buffer(vk::Buffer),
 }
 
 impl Resource {
     pub fn image(image: &Image) -> Self {
-        Resource::Image { raw: image.raw, aspect: image.aspect() }
+        Resource::Image { raw: image.raw, aspect: image.aspect(), texel_bytes: image.texel_bytes() }
     }
 
     pub fn buffer(buffer: &Buffer) -> Self {
@@ -255,7 +261,7 @@ fn push_barrier(
     src_access: vk::AccessFlags2,
 ) {
     match u.resource {
-        Resource::Image { raw, aspect } => out.images.push(
+        Resource::Image { raw, aspect, .. } => out.images.push(
             vk::ImageMemoryBarrier2::default()
                 .src_stage_mask(src_stage)
                 .src_access_mask(src_access)
@@ -330,7 +336,7 @@ mod tests {
     use super::*;
 
     fn image(n: u64) -> Resource {
-        Resource::Image { raw: vk::Handle::from_raw(n), aspect: vk::ImageAspectFlags::COLOR }
+        Resource::Image { raw: vk::Handle::from_raw(n), aspect: vk::ImageAspectFlags::COLOR, texel_bytes: 16 }
     }
 
     #[test]

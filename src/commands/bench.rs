@@ -14,13 +14,30 @@ use serde_json::json;
 
 use super::bake::default_model_path;
 use super::variant::VariantArg;
-use crate::gpu_frame::{FrameSettings, GpuFrame, Shown, TIMESTAMPS};
+use crate::gpu_frame::{FrameOutput, FrameSettings, GpuFrame, Shown, TIMESTAMPS};
 
 /// Frames run before timing starts.
 const WARM_UP: u32 = 2;
 
 /// Multiply-adds of one 13 → 20 → 10 → 3 network: 13·20 + 20·10 + 10·3.
 const MULTIPLY_ADDS: f64 = 490.0;
+
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputArg {
+    Radiance,
+    Display,
+    Both,
+}
+
+impl OutputArg {
+    fn outputs(self) -> Vec<FrameOutput> {
+        match self {
+            OutputArg::Radiance => vec![FrameOutput::Radiance],
+            OutputArg::Display => vec![FrameOutput::Display],
+            OutputArg::Both => vec![FrameOutput::Radiance, FrameOutput::Display],
+        }
+    }
+}
 
 /// `--variant`: one variant, or all of them.
 #[derive(Clone, Debug)]
@@ -56,6 +73,11 @@ pub struct BenchArgs {
     /// all of them one after the other.
     #[arg(long, default_value = "all", value_parser = parse_variants, value_name = "V|all")]
     pub variant: Variants,
+    /// Which frame to time: `radiance` writes the direct, indirect and global radiance images
+    /// then tonemaps one (rrf render, eval), `display` writes only the tonemapped display image
+    /// (the walkthrough's frame), `both` times each.
+    #[arg(long, value_enum, default_value_t = OutputArg::Both)]
+    pub output: OutputArg,
     /// The device's fp32 peak in GFLOP/s, to report the fraction the network pass reaches.
     #[arg(long)]
     pub peak_gflops: Option<f64>,
@@ -87,12 +109,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         bail!("{} cannot write timestamps on its queue", ctx.info.name);
     };
     let bench = Bench { ctx: &ctx, period_ns: f64::from(period_ns), scene: &scene, model: &model, args };
-    let rows: Result<Vec<_>> = args
-        .variant
-        .0
-        .iter()
-        .map(|&variant| {
-            let row = bench.variant(variant, &view, width, height)?;
+    let runs = args.variant.0.iter().flat_map(|&v| args.output.outputs().into_iter().map(move |o| (v, o)));
+    let rows: Result<Vec<_>> = runs
+        .map(|(variant, output)| {
+            let row = bench.variant(variant, output, &view, width, height)?;
             print_row(&row, args.json);
             Ok(row)
         })
@@ -115,17 +135,26 @@ struct Bench<'a> {
 
 impl Bench<'_> {
     /// Times one variant; returns its row.
-    fn variant(&self, variant: VariantArg, view: &View, width: u32, height: u32) -> Result<serde_json::Value> {
+    fn variant(
+        &self,
+        variant: VariantArg,
+        output: FrameOutput,
+        view: &View,
+        width: u32,
+        height: u32,
+    ) -> Result<serde_json::Value> {
         let (ctx, scene, model, args) = (self.ctx, self.scene, self.model, self.args);
         let light = scene.moving_light.as_ref().map(|l| l.default_position).unwrap_or_default();
         let setup = Instant::now();
-        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height })?;
+        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, output)?;
         let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
         let settings = FrameSettings { view: view.clone(), light, exposure_scale: 1.0, shown: Shown::Gi };
+        let bytes_per_pixel = frame.bytes_per_pixel(ctx, &settings);
         let timed = self.time_frames(&frame, &settings);
         let objects = timed.as_ref().ok().map(|_| frame.read_objects(ctx));
         frame.destroy(ctx);
         let (passes, cpu) = timed?;
+        let bytes_per_pixel = bytes_per_pixel?;
         let objects = objects.expect("read after timing")?;
         let [gbuffer, network, tonemap, _rest] = passes;
         // Networks evaluated per frame: two per pixel of an object that has them.
@@ -138,6 +167,10 @@ impl Bench<'_> {
         Ok(json!({
             "device": ctx.info.name,
             "variant": variant.0.name(),
+            "output": match output {
+                FrameOutput::Radiance => "radiance",
+                FrameOutput::Display => "display",
+            },
             "scene": scene.name,
             "width": width,
             "height": height,
@@ -147,6 +180,7 @@ impl Bench<'_> {
             "network_ms": network_ms,
             "tonemap_ms": median(tonemap),
             "frame_ms": median(cpu),
+            "bytes_per_pixel": bytes_per_pixel,
             "networks_per_frame": evaluations,
             "network_pixels_per_s": per_s,
             "network_gflops": gflops,
@@ -183,7 +217,7 @@ impl Bench<'_> {
                         }
                     }
                 }
-                frame.record(ctx, handles.cmd, settings, None, Some(handles.queries), vec![]);
+                frame.record(ctx, handles.cmd, settings, None, Some(handles.queries), vec![])?;
                 ring.submit(ctx, None, None, true)?;
             }
             Ok((passes, cpu))
@@ -201,11 +235,12 @@ fn print_row(row: &serde_json::Value, json: bool) {
     let f = |key: &str| row[key].as_f64().unwrap_or_default();
     let s = |key: &str| row[key].as_str().unwrap_or_default().to_string();
     println!(
-        "{} {} on {}, {}x{}, median of {} frames (pipelines built in {:.0} ms):\n  \
+        "{} {} ({} frame) on {}, {}x{}, median of {} frames (pipelines built in {:.0} ms):\n  \
          G-buffer {:.2} ms, network {:.2} ms, tonemap {:.2} ms; frame {:.2} ms (CPU, start to start, {} frames in flight)\n  \
-         {:.1} M network-pixels/s ({:.1} GFLOP/s{})",
+         {:.1} M network-pixels/s ({:.1} GFLOP/s{}); {} image bytes per pixel",
         s("scene"),
         s("variant"),
+        s("output"),
         s("device"),
         row["width"],
         row["height"],
@@ -219,5 +254,6 @@ fn print_row(row: &serde_json::Value, json: bool) {
         f("network_pixels_per_s") / 1e6,
         f("network_gflops"),
         row["peak_fraction"].as_f64().map(|p| format!(", {:.1}% of peak", 100.0 * p)).unwrap_or_default(),
+        row["bytes_per_pixel"],
     );
 }

@@ -20,7 +20,7 @@ use crate::eval::figure::{compose, Panel};
 use crate::eval::metrics::compare;
 use crate::eval::reference_cache::{default_cache_dir, reference};
 use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, ConfigReport, Report};
-use crate::gpu_frame::{rgb, FrameSettings, GpuFrame, Shown};
+use crate::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
 use crate::image_out::tonemap_rgb8;
 use crate::progress::Progress;
 
@@ -70,7 +70,8 @@ enum Predictor {
 /// The Vulkan context and the one frame every configuration renders with.
 fn gpu_predictor(scene: &Scene, model: &Model, width: u32, height: u32) -> Result<Box<(Context, GpuFrame)>> {
     let ctx = Context::new(&ContextOptions::from_env())?;
-    let frame = GpuFrame::new(&ctx, scene, model, Variant::Tiled, vk::Extent2D { width, height })?;
+    let extent = vk::Extent2D { width, height };
+    let frame = GpuFrame::new(&ctx, scene, model, Variant::Tiled, extent, FrameOutput::Radiance)?;
     Ok(Box::new((ctx, frame)))
 }
 

@@ -15,7 +15,7 @@ use rrf_renderer::{vk, Context, ContextOptions};
 use super::bake::default_model_path;
 use super::variant::VariantArg;
 use super::view_args::{Component, ViewArgs};
-use crate::gpu_frame::{rgb, FrameSettings, GpuFrame, Shown};
+use crate::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
 use crate::image_out::write_image;
 
 #[derive(Args, Debug)]
@@ -80,7 +80,7 @@ fn gpu_render(
     let default_light = scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position);
     let light = light.unwrap_or(default_light);
     let extent = vk::Extent2D { width, height };
-    let frame = GpuFrame::new(&ctx, scene, model, variant.0, extent)?;
+    let frame = GpuFrame::new(&ctx, scene, model, variant.0, extent, FrameOutput::Radiance)?;
     let settings = FrameSettings { view: view.clone(), light, exposure_scale: 1.0, shown: Shown::Gi };
     let rendered = frame.render(&ctx, &settings);
     frame.destroy(&ctx);

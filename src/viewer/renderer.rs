@@ -17,7 +17,7 @@ use rrf_renderer::{vk, Context, Image};
 
 use super::state::ViewerState;
 use super::stats::Stats;
-use crate::gpu_frame::{GpuFrame, TIMESTAMPS};
+use crate::gpu_frame::{FrameOutput, GpuFrame, TIMESTAMPS};
 
 /// A window's surface and its swapchain, remade when the window's size changes.
 pub struct Presenter {
@@ -62,7 +62,7 @@ pub struct Renderer {
 impl Renderer {
     /// The frame for `scene` at `extent`, with frames in flight.
     pub fn new(ctx: Context, scene: &Scene, model: &Model, variant: Variant, extent: vk::Extent2D) -> Result<Self> {
-        let frame = ctx.guard(GpuFrame::new(&ctx, scene, model, variant, extent)?);
+        let frame = ctx.guard(GpuFrame::new(&ctx, scene, model, variant, extent, FrameOutput::Display)?);
         let ring = FrameLoop::new(&ctx, TIMESTAMPS)?;
         let frame = frame.keep();
         let period_ns = ctx.info.limits.timestamp_period_ns.map(f64::from);
@@ -172,13 +172,13 @@ impl Renderer {
         if let Some((p, index)) = &target {
             let swapchain = p.swapchain.as_ref().expect("checked above");
             let image = swapchain.images[*index as usize];
-            let resource = Resource::Image { raw: image, aspect: vk::ImageAspectFlags::COLOR };
+            let resource = Resource::Image { raw: image, aspect: vk::ImageAspectFlags::COLOR, texel_bytes: 4 };
             // The submission waits for the acquire semaphore at the transfer stage.
             frame.states().arrive(resource, vk::PipelineStageFlags2::ALL_TRANSFER);
             extra.extend(present_passes(ctx, ldr, image, swapchain.extent));
         }
         let overlay = grid.as_ref().map(|g| (g, overlay_scale));
-        frame.record(ctx, handles.cmd, &state.settings(), overlay, period_ns.map(|_| handles.queries), extra);
+        frame.record(ctx, handles.cmd, &state.settings(), overlay, period_ns.map(|_| handles.queries), extra)?;
         let wait = target.as_ref().map(|_| handles.image_available);
         let signal = target.as_ref().map(|(p, i)| p.swapchain.as_ref().expect("checked above").render_done(*i));
         ring.submit(ctx, wait, signal, period_ns.is_some())?;
@@ -242,7 +242,7 @@ impl Renderer {
 
 /// Blits the display image to a swapchain image and hands it to presentation.
 fn present_passes<'a>(ctx: &'a Context, ldr: &'a Image, image: vk::Image, extent: vk::Extent2D) -> [Pass<'a>; 2] {
-    let target = Resource::Image { raw: image, aspect: vk::ImageAspectFlags::COLOR };
+    let target = Resource::Image { raw: image, aspect: vk::ImageAspectFlags::COLOR, texel_bytes: 4 };
     let uses = vec![Use::image(ldr, Access::TRANSFER_READ), Use { resource: target, access: Access::TRANSFER_WRITE }];
     let blit = Pass::new("blit to swapchain", uses, move |cmd| {
         let layers = vk::ImageSubresourceLayers {

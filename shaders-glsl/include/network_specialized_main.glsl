@@ -1,0 +1,74 @@
+// Network pass, step 2 of the specialized variants: one pipeline per object, with that
+// object's direct and indirect weights as specialization constants (see build.rs), so the
+// driver compiles them into the code as immediates.
+//
+// TILED: the dispatch is indirect, one workgroup per tile that network_classify.comp listed
+// for this object. Otherwise it covers the whole image and skips other objects' pixels.
+//
+// With DISPLAY defined (network_display.comp) the pass writes only what the window shows: the
+// chosen component, tonemapped, into one RGBA8 image. Otherwise it writes the direct, indirect
+// and global radiance as RGBA32F images, for read-back.
+#ifndef RRF_NETWORK_SPECIALIZED_MAIN_GLSL
+#define RRF_NETWORK_SPECIALIZED_MAIN_GLSL
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+// The G-buffer's object value (object id + 1) this pipeline shades.
+layout(constant_id = 0) const uint OBJECT = 1u;
+layout(constant_id = 1) const bool TILED = true;
+
+layout(binding = 0, rgba32f) uniform readonly image2D gbuffer_position;
+layout(binding = 1, rgba32f) uniform readonly image2D gbuffer_normal;
+layout(binding = 2, r32ui) uniform readonly uimage2D gbuffer_object;
+layout(binding = 3, rgba32f) uniform readonly image2D gbuffer_emission;
+layout(binding = 4) readonly buffer Tiles { uint tiles[]; };
+#ifdef DISPLAY
+layout(binding = 5, rgba8) uniform writeonly image2D display;
+#else
+layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
+#endif
+
+layout(push_constant) uniform Constants {
+    vec4 eye;
+    vec4 light;
+    uint tile_capacity;
+    // DISPLAY only: 2^EV, and the component shown (0 global, 1 direct, 2 indirect).
+    float exposure_scale;
+    uint shown;
+} constants;
+
+#include "network_inputs.glsl"
+#include "specialized_networks.glsl"
+#ifdef DISPLAY
+#include "tonemap.glsl"
+#endif
+
+void main() {
+    uvec2 tile = gl_WorkGroupID.xy;
+    if (TILED) {
+        uint packed = tiles[(OBJECT - 1u) * constants.tile_capacity + gl_WorkGroupID.x];
+        tile = uvec2(packed & 0xffffu, packed >> 16);
+    }
+    ivec2 pixel = ivec2(tile * gl_WorkGroupSize.xy + gl_LocalInvocationID.xy);
+    if (any(greaterThanEqual(pixel, imageSize(gbuffer_object))) || imageLoad(gbuffer_object, pixel).r != OBJECT) {
+        return;
+    }
+    float x[INPUTS] = raw_inputs(imageLoad(gbuffer_position, pixel), imageLoad(gbuffer_normal, pixel).xyz,
+                                 constants.eye.xyz, constants.light.xyz);
+    vec3 direct = direct_network(x);
+    vec3 indirect = indirect_network(x);
+#ifdef DISPLAY
+    vec3 shown = constants.shown == 1u ? direct
+               : constants.shown == 2u ? indirect
+               : imageLoad(gbuffer_emission, pixel).rgb + direct + indirect;
+    imageStore(display, pixel, vec4(tonemap(shown, constants.exposure_scale), 1.0));
+#else
+    imageStore(out_direct, pixel, vec4(direct, 1.0));
+    imageStore(out_indirect, pixel, vec4(indirect, 1.0));
+    imageStore(out_gi, pixel, vec4(imageLoad(gbuffer_emission, pixel).rgb + direct + indirect, 1.0));
+#endif
+}
+
+#endif
