@@ -4,8 +4,8 @@
 
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
-layout(location = 2) in vec4 in_emission_roughness;
-layout(location = 3) in uint in_object;
+layout(location = 2) in uint in_object;
+layout(location = 3) in uint in_material;
 
 layout(push_constant) uniform Frame {
     mat4 view_projection;
@@ -16,14 +16,14 @@ layout(push_constant) uniform Frame {
 
 layout(location = 0) out vec3 out_position;
 layout(location = 1) out vec3 out_normal;
-layout(location = 2) out vec4 out_emission_roughness;
-layout(location = 3) flat out uint out_object;
+layout(location = 2) flat out uint out_object;
+layout(location = 3) flat out uint out_material;
 
 void main() {
     vec3 position = in_position + (in_object + 1u == frame.light_object ? frame.light_offset.xyz : vec3(0.0));
     out_position = position;
     out_normal = in_normal;
-    out_emission_roughness = in_emission_roughness;
     out_object = in_object;
+    out_material = in_material;
     gl_Position = frame.view_projection * vec4(position, 1.0);
 }

@@ -8,14 +8,11 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-layout(binding = 0, rgba32f) uniform readonly image2D gbuffer_position;
-layout(binding = 1, rgba32f) uniform readonly image2D gbuffer_normal;
-layout(binding = 2, r32ui) uniform readonly uimage2D gbuffer_object;
-layout(binding = 3, rgba32f) uniform readonly image2D gbuffer_emission;
-layout(binding = 4) readonly buffer Weights { float weights[]; };
-layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
+// Bindings 0-2 (G-buffer, materials): network_inputs.glsl.
+layout(binding = 3) readonly buffer Weights { float weights[]; };
+layout(binding = 4, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = 5, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = 6, rgba32f) uniform writeonly image2D out_gi;
 
 layout(push_constant) uniform Constants {
     vec4 eye;
@@ -31,16 +28,16 @@ void main() {
     if (any(greaterThanEqual(pixel, imageSize(out_gi)))) {
         return;
     }
-    uint id = imageLoad(gbuffer_object, pixel).r;
-    vec3 emission = imageLoad(gbuffer_emission, pixel).rgb;
+    uint id = imageLoad(gbuffer_id, pixel).r;
+    uint object = id_object(id);
+    vec3 emission = object > 0u ? surface_emission(id) : vec3(0.0);
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
-    if (id > 0u) {
-        uint base = (id - 1u) * OBJECT_STRIDE;
+    if (object > 0u) {
+        uint base = (object - 1u) * OBJECT_STRIDE;
         uint ranges = base + 2 * PARAMETERS;
         if (weights[ranges + 2 * INPUTS + 2] > 0.5) {
-            float raw[INPUTS] = raw_inputs(imageLoad(gbuffer_position, pixel), imageLoad(gbuffer_normal, pixel).xyz,
-                                           constants.eye.xyz, constants.light.xyz);
+            float raw[INPUTS] = raw_inputs(pixel, id, constants.eye.xyz, constants.light.xyz);
             float x[INPUTS];
             for (int i = 0; i < INPUTS; ++i) {
                 x[i] = normalize_input(raw[i], weights[ranges + i], weights[ranges + INPUTS + i]);

@@ -12,7 +12,7 @@ use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::network::Component;
 use rrf_baker::scene::{Scene, View};
-use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets};
+use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
 use rrf_renderer::network_pass::{NetworkConstants, NetworkPass, NetworkShaders, ObjectNetworks, Variant};
 use rrf_renderer::overlay::{OverlayPass, TextGrid};
 use rrf_renderer::resources::read_back_passes;
@@ -20,7 +20,7 @@ use rrf_renderer::sync::{run_passes, Pass, Resource, ResourceStates};
 use rrf_renderer::tonemap::TonemapPass;
 use rrf_renderer::{vk, Context, Destroy, Image};
 
-use crate::gpu_scene::{gbuffer_constants, gbuffer_vertices, moving_light_object};
+use crate::gpu_scene::{gbuffer_constants, gbuffer_materials, gbuffer_vertices, moving_light_object};
 use crate::shaders;
 
 /// Each object's networks, by object id; `None` for objects the model has none for.
@@ -155,7 +155,9 @@ impl GpuFrame {
         let objects = object_networks(scene, model);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
         let display = (output == FrameOutput::Display && variant != Variant::Storage).then_some(&*ldr);
-        let network = ctx.guard(NetworkPass::new(ctx, variant, &network_shaders, &targets, &objects, display)?);
+        let materials = gbuffer_materials(scene);
+        let network =
+            ctx.guard(NetworkPass::new(ctx, variant, &network_shaders, &targets, &objects, &materials, display)?);
         let mut tonemaps = ctx.guard(Vec::with_capacity(3));
         for hdr in network.outputs().into_iter().flat_map(|o| [&o.gi, &o.direct, &o.indirect]) {
             tonemaps.push(TonemapPass::new(ctx, shaders::TONEMAP_COMP, hdr, &ldr)?);
@@ -339,7 +341,7 @@ impl GpuFrame {
 
     /// Object ids + 1 of the last frame's pixels (0: nothing).
     pub fn read_objects(&self, ctx: &Context) -> Result<Vec<u32>> {
-        let image = &self.targets.object;
+        let image = &self.targets.id;
         let buffer = ctx.create_readback_buffer(image)?;
         let read = ctx
             .submit_once(|cmd| {
@@ -347,7 +349,7 @@ impl GpuFrame {
             })
             .and_then(|()| ctx.decode(image.format, &buffer));
         ctx.destroy_buffer(buffer);
-        Ok(read?.iter().map(|&v| v as u32).collect())
+        Ok(read?.iter().map(|&v| GBufferTexel::decode([0; 4], v.to_bits()).object).collect())
     }
 
     pub fn destroy(self, ctx: &Context) {

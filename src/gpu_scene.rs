@@ -19,20 +19,24 @@ pub fn gbuffer_vertices(scene: &Scene) -> Vec<GBufferVertex> {
     let mut out = Vec::with_capacity(scene.triangle_count() * 3);
     for object in &scene.objects {
         for part in &object.parts {
-            let m = &scene.materials[part.material as usize];
             for t in part.triangles.clone() {
                 for &v in &object.triangles[t as usize] {
                     out.push(GBufferVertex {
                         position: object.positions[v as usize].to_array(),
                         normal: object.normals[v as usize].to_array(),
-                        emission_roughness: m.emission.extend(m.roughness).to_array(),
                         object: object.id,
+                        material: part.material,
                     });
                 }
             }
         }
     }
     out
+}
+
+/// Each material's emitted radiance (rgb) and roughness, as the network pass reads them.
+pub fn gbuffer_materials(scene: &Scene) -> Vec<[f32; 4]> {
+    scene.materials.iter().map(|m| m.emission.extend(m.roughness).to_array()).collect()
 }
 
 /// The G-buffer pass's constants: the view-projection into Vulkan clip space (y down, depth

@@ -10,7 +10,7 @@ use rrf::shaders;
 use rrf_baker::glam::{Vec2, Vec3};
 use rrf_baker::scene::Scene;
 use rrf_baker::trace::{Camera, Geometry, World};
-use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets};
+use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
 use rrf_renderer::vk;
 
 fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
@@ -25,10 +25,13 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
     let pass = GBufferPass::new(&ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG).unwrap();
     ctx.submit_once(|cmd| pass.record(&ctx, cmd, &targets, &mesh, &gbuffer_constants(&view, aspect, Vec3::ZERO, None)))
         .unwrap();
-    let position = ctx.read_image(&targets.position, vk::ImageLayout::GENERAL).unwrap();
-    let normal = ctx.read_image(&targets.normal, vk::ImageLayout::GENERAL).unwrap();
-    let object = ctx.read_image(&targets.object, vk::ImageLayout::GENERAL).unwrap();
-    let emission = ctx.read_image(&targets.emission, vk::ImageLayout::GENERAL).unwrap();
+    let surface = ctx.read_image(&targets.surface, vk::ImageLayout::GENERAL).unwrap();
+    let id = ctx.read_image(&targets.id, vk::ImageLayout::GENERAL).unwrap();
+    let texels: Vec<GBufferTexel> = surface
+        .chunks_exact(4)
+        .zip(&id)
+        .map(|(s, i)| GBufferTexel::decode([s[0], s[1], s[2], s[3]].map(f32::to_bits), i.to_bits()))
+        .collect();
     pass.destroy(&ctx);
     mesh.destroy(&ctx);
     targets.destroy(&ctx);
@@ -50,8 +53,8 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
     let mut worst_normal = 0.0f32;
     for y in 0..height as i64 {
         for x in 0..width as i64 {
-            let i = (y as usize * width as usize + x as usize) * 4;
-            let gpu_id = object[i / 4] as u32;
+            let texel = texels[y as usize * width as usize + x as usize];
+            let gpu_id = texel.object;
             let cpu_id = id_at(x, y).unwrap_or(0);
             same_id += usize::from(gpu_id == cpu_id);
             // Away from silhouettes: the same object all around.
@@ -66,13 +69,15 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
             let dir = camera.direction(film);
             let hit = world.intersect(camera.eye, dir).unwrap();
             let si = world.interaction(camera.eye, dir, hit);
-            let p = Vec3::new(position[i], position[i + 1], position[i + 2]);
-            let n = Vec3::new(normal[i], normal[i + 1], normal[i + 2]);
+            let p = Vec3::from(texel.position);
+            let n = Vec3::from(texel.normal);
             let scale = (si.position - camera.eye).length();
             worst_position = worst_position.max((p - si.position).length() / scale);
             worst_normal = worst_normal.max((n - si.shading_normal).length());
-            assert!((position[i + 3] - si.roughness).abs() < 1e-6);
-            let e = Vec3::new(emission[i], emission[i + 1], emission[i + 2]);
+            // Roughness and emission come from the pixel's material (emission from its front).
+            let material = &scene.materials[texel.material as usize];
+            assert!((material.roughness - si.roughness).abs() < 1e-6);
+            let e = if texel.front { material.emission } else { Vec3::ZERO };
             assert!((e - si.emission).abs().max_element() < 1e-4, "emission {e} vs {}", si.emission);
             checked += 1;
         }

@@ -64,7 +64,14 @@ fn compare(scene_name: &str, view_name: &str, light: Vec3, width: u32, height: u
     }
 }
 
-/// At least 99.9% of the pixels within 1e-3 relative error.
+/// Relative error that 99.9% of the pixels stay within. The CPU inference takes the exact
+/// shading normal; the GPU's comes from the G-buffer's 16-bit octahedral encoding, which moves
+/// it by up to 3e-5 and the networks' output by up to a few 1e-3 where they are steep. A step
+/// of the 8-bit display is 4e-3 or more. (The rest are silhouette pixels, where the raster and
+/// the ray cast see different objects.)
+const TOLERANCE: f32 = 5e-3;
+
+/// At least 99.9% of the pixels within [`TOLERANCE`].
 fn check(what: &str, cpu: &[Radiance], gpu: &[f32], pick: Pick) {
     let mut within = 0;
     let mut worst = 0.0f32;
@@ -74,11 +81,11 @@ fn check(what: &str, cpu: &[Radiance], gpu: &[f32], pick: Pick) {
         // Relative error per pixel, with an absolute floor far below what a display shows.
         let error = ((g - c).abs() / (c.abs() + Vec3::splat(1e-3))).max_element();
         worst = worst.max(error);
-        within += usize::from(error <= 1e-3);
+        within += usize::from(error <= TOLERANCE);
     }
     let n = cpu.len();
-    eprintln!("{what}: {within}/{n} pixels within 1e-3 relative, worst {worst:.2e}");
-    assert!(within as f64 >= 0.999 * n as f64, "{what}: only {within} of {n} pixels within 1e-3");
+    eprintln!("{what}: {within}/{n} pixels within {TOLERANCE:e} relative, worst {worst:.2e}");
+    assert!(within as f64 >= 0.999 * n as f64, "{what}: only {within} of {n} pixels within {TOLERANCE:e}");
 }
 
 #[test]

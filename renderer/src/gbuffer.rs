@@ -1,5 +1,6 @@
-//! The G-buffer raster pass: per pixel, what the network pass needs (world position,
-//! roughness, shading normal, object id) and what the composite needs (emission).
+//! The G-buffer raster pass: per pixel, what the network pass needs, packed into 20 bytes plus
+//! depth (`shaders-glsl/include/gbuffer_layout.glsl`): the world position, the shading normal,
+//! the object and material, and which face is seen. Emission and roughness are per material.
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
@@ -17,9 +18,45 @@ use crate::sync::{Access, Pass, ResourceStates, Use};
 pub struct GBufferVertex {
     pub position: [f32; 3],
     pub normal: [f32; 3],
-    /// Emitted radiance (rgb) and roughness (w).
-    pub emission_roughness: [f32; 4],
     pub object: u32,
+    pub material: u32,
+}
+
+/// The most objects and materials the packed G-buffer tells apart (16 and 15 bits).
+pub const MAX_OBJECTS: usize = 0xffff - 1;
+pub const MAX_MATERIALS: usize = 0x7fff;
+
+/// One pixel of the G-buffer, decoded on the CPU (for tests): the twin of
+/// `gbuffer_layout.glsl`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GBufferTexel {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    /// Object id + 1; 0 where nothing was drawn.
+    pub object: u32,
+    pub material: u32,
+    pub front: bool,
+}
+
+impl GBufferTexel {
+    /// Decodes the `surface` (four words) and `id` (one word) texels.
+    pub fn decode(surface: [u32; 4], id: u32) -> Self {
+        let snorm = |bits: u32| (f32::from((bits & 0xffff) as u16 as i16) / 32767.0).max(-1.0);
+        let (px, py) = (snorm(surface[3]), snorm(surface[3] >> 16));
+        let mut n = [px, py, 1.0 - px.abs() - py.abs()];
+        if n[2] < 0.0 {
+            let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
+            n = [(1.0 - py.abs()) * sign(px), (1.0 - px.abs()) * sign(py), n[2]];
+        }
+        let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        GBufferTexel {
+            position: [f32::from_bits(surface[0]), f32::from_bits(surface[1]), f32::from_bits(surface[2])],
+            normal: n.map(|c| c / length),
+            object: id & 0xffff,
+            material: (id >> 16) & 0x7fff,
+            front: id >> 31 == 1,
+        }
+    }
 }
 
 /// Per-frame constants of the pass: a column-major view-projection matrix (Vulkan clip space:
@@ -35,22 +72,16 @@ pub struct GBufferConstants {
     pub pad: [u32; 3],
 }
 
-pub const POSITION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-pub const NORMAL_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-pub const OBJECT_FORMAT: vk::Format = vk::Format::R32_UINT;
-pub const EMISSION_FORMAT: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub const SURFACE_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
+pub const ID_FORMAT: vk::Format = vk::Format::R32_UINT;
 const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 /// The G-buffer's images, in `GENERAL` layout between passes.
 pub struct GBufferTargets {
-    /// xyz: world position; w: roughness.
-    pub position: Image,
-    /// xyz: shading normal facing the viewer.
-    pub normal: Image,
-    /// Object id + 1; 0 where nothing was drawn.
-    pub object: Image,
-    /// rgb: emitted radiance towards the viewer.
-    pub emission: Image,
+    /// xyz: the world position's bits; w: the shading normal facing the viewer, octahedral.
+    pub surface: Image,
+    /// Object id + 1 (0 where nothing was drawn), material, front face seen.
+    pub id: Image,
     depth: Image,
     pub extent: vk::Extent2D,
 }
@@ -60,29 +91,20 @@ impl GBufferTargets {
         let color =
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let image = |name, format, usage| ctx.create_image(name, extent, format, usage).map(|i| ctx.guard(i));
-        let position = image("gbuffer position", POSITION_FORMAT, color)?;
-        let normal = image("gbuffer normal", NORMAL_FORMAT, color)?;
-        let object = image("gbuffer object", OBJECT_FORMAT, color)?;
-        let emission = image("gbuffer emission", EMISSION_FORMAT, color)?;
+        let surface = image("gbuffer surface", SURFACE_FORMAT, color)?;
+        let id = image("gbuffer id", ID_FORMAT, color)?;
         let depth = image("gbuffer depth", DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?;
         ctx.submit_once(|cmd| {
-            for image in [&position, &normal, &object, &emission] {
+            for image in [&surface, &id] {
                 ctx.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
             }
             ctx.transition(cmd, &depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
         })?;
-        Ok(GBufferTargets {
-            position: position.keep(),
-            normal: normal.keep(),
-            object: object.keep(),
-            emission: emission.keep(),
-            depth: depth.keep(),
-            extent,
-        })
+        Ok(GBufferTargets { surface: surface.keep(), id: id.keep(), depth: depth.keep(), extent })
     }
 
-    fn colors(&self) -> [&Image; 4] {
-        [&self.position, &self.normal, &self.object, &self.emission]
+    fn colors(&self) -> [&Image; 2] {
+        [&self.surface, &self.id]
     }
 
     /// Records where `new` left the images.
@@ -100,7 +122,7 @@ impl GBufferTargets {
 
 impl Destroy for GBufferTargets {
     fn destroy(self, ctx: &Context) {
-        for image in [self.position, self.normal, self.object, self.emission, self.depth] {
+        for image in [self.surface, self.id, self.depth] {
             ctx.destroy_image(image);
         }
     }
@@ -195,11 +217,8 @@ impl GBufferPass {
                     .location(1)
                     .format(vk::Format::R32G32B32_SFLOAT)
                     .offset(12),
-                vk::VertexInputAttributeDescription::default()
-                    .location(2)
-                    .format(vk::Format::R32G32B32A32_SFLOAT)
-                    .offset(24),
-                vk::VertexInputAttributeDescription::default().location(3).format(vk::Format::R32_UINT).offset(40),
+                vk::VertexInputAttributeDescription::default().location(2).format(vk::Format::R32_UINT).offset(24),
+                vk::VertexInputAttributeDescription::default().location(3).format(vk::Format::R32_UINT).offset(28),
             ];
             let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
                 .vertex_binding_descriptions(&bindings)
@@ -221,11 +240,11 @@ impl GBufferPass {
                 .depth_write_enable(true)
                 .depth_compare_op(vk::CompareOp::LESS);
             let blend =
-                [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 4];
+                [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 2];
             let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
             let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
             let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-            let formats = [POSITION_FORMAT, NORMAL_FORMAT, OBJECT_FORMAT, EMISSION_FORMAT];
+            let formats = [SURFACE_FORMAT, ID_FORMAT];
             let mut rendering = vk::PipelineRenderingCreateInfo::default()
                 .color_attachment_formats(&formats)
                 .depth_attachment_format(DEPTH_FORMAT);
@@ -277,8 +296,7 @@ impl GBufferPass {
         camera: &GBufferConstants,
     ) {
         let device = &ctx.device;
-        let clear = |c: vk::ClearColorValue| vk::ClearValue { color: c };
-        let zero = clear(vk::ClearColorValue { float32: [0.0; 4] });
+        let zero = vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } };
         let attachments: Vec<vk::RenderingAttachmentInfo> = targets
             .colors()
             .iter()
@@ -288,11 +306,7 @@ impl GBufferPass {
                     .image_layout(vk::ImageLayout::GENERAL)
                     .load_op(vk::AttachmentLoadOp::CLEAR)
                     .store_op(vk::AttachmentStoreOp::STORE)
-                    .clear_value(if image.format == OBJECT_FORMAT {
-                        clear(vk::ClearColorValue { uint32: [0; 4] })
-                    } else {
-                        zero
-                    })
+                    .clear_value(zero)
             })
             .collect();
         let depth = vk::RenderingAttachmentInfo::default()

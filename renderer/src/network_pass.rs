@@ -17,7 +17,7 @@ use gpu_allocator::MemoryLocation;
 use crate::compute::{Bind, ComputePass, Dispatch, Specialization};
 use crate::context::Context;
 use crate::error::{Error, Result};
-use crate::gbuffer::GBufferTargets;
+use crate::gbuffer::{self, GBufferTargets};
 use crate::guard::Destroy;
 use crate::resources::{Buffer, Image};
 use crate::sync::{Access, Pass, ResourceStates, Use};
@@ -244,6 +244,8 @@ impl<'a> Written<'a> {
 pub struct NetworkPass {
     variant: Variant,
     extent: vk::Extent2D,
+    /// Per material: rgb emitted radiance, roughness (what the G-buffer's material ids index).
+    materials: Buffer,
     /// The radiance images; `None` when the pass writes a display image instead.
     outputs: Option<NetworkOutputs>,
     kind: Kind,
@@ -277,15 +279,29 @@ impl NetworkPass {
     /// The pass for `objects` (by object id; `None` for objects without networks), which
     /// reads `gbuffer`. With `display` (an RGBA8 storage image of the G-buffer's size), the
     /// pass writes only that: the component shown, tonemapped, as a window shows it; the
-    /// storage variant cannot.
+    /// storage variant cannot. `materials` holds each material's emitted radiance (rgb) and
+    /// roughness.
     pub fn new(
         ctx: &Context,
         variant: Variant,
         shaders: &NetworkShaders,
         gbuffer: &GBufferTargets,
         objects: &[Option<ObjectNetworks>],
+        materials: &[[f32; 4]],
         display: Option<&Image>,
     ) -> Result<Self> {
+        if objects.len() > gbuffer::MAX_OBJECTS || materials.len() > gbuffer::MAX_MATERIALS {
+            return Err(Error::Invalid(format!(
+                "{} objects and {} materials; the G-buffer tells apart at most {} objects and {} materials",
+                objects.len(),
+                materials.len(),
+                gbuffer::MAX_OBJECTS,
+                gbuffer::MAX_MATERIALS
+            )));
+        }
+        let bytes: &[u8] = if materials.is_empty() { &[0; 16] } else { bytemuck::cast_slice(materials) };
+        let materials =
+            ctx.guard(ctx.create_buffer_with_data("materials", bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?);
         let outputs = match display {
             Some(_) => None,
             None => Some(NetworkOutputs::new(ctx, gbuffer.extent)?),
@@ -298,7 +314,7 @@ impl NetworkPass {
         };
         let kind = match variant {
             Variant::Storage => match written {
-                Written::Radiance(o) => storage(ctx, shaders.storage, gbuffer, o, objects)?,
+                Written::Radiance(o) => storage(ctx, shaders.storage, gbuffer, &materials, o, objects)?,
                 Written::Display(_) => {
                     return Err(Error::Invalid("the storage network variant cannot write a display image".into()))
                 }
@@ -307,12 +323,13 @@ impl NetworkPass {
                 ctx,
                 shaders,
                 gbuffer,
+                &materials,
                 written,
                 objects,
                 variant == Variant::Tiled,
             )?)),
         };
-        Ok(NetworkPass { variant, extent: gbuffer.extent, outputs: outputs.keep(), kind })
+        Ok(NetworkPass { variant, extent: gbuffer.extent, materials: materials.keep(), outputs: outputs.keep(), kind })
     }
 
     /// The radiance images, unless the pass writes a display image.
@@ -363,14 +380,17 @@ impl NetworkPass {
             (None, None) => unreachable!("checked by `written` above"),
         };
         match &mut self.kind {
-            Kind::Storage { pass, weights } => pass.rebind(ctx, &network_bindings(gbuffer, weights, written)),
+            Kind::Storage { pass, weights } => {
+                pass.rebind(ctx, &network_bindings(gbuffer, &self.materials, weights, written))
+            }
             Kind::Specialized(s) => {
                 if let Some((tiles, capacity)) = tiles {
                     ctx.destroy_buffer(std::mem::replace(&mut s.tiles, tiles));
                     s.tile_capacity = capacity;
                 }
-                s.classify.rebind(ctx, &classify_bindings(gbuffer, &s.trained, &s.dispatch, &s.tiles, written));
-                s.networks.rebind(ctx, &network_bindings(gbuffer, &s.tiles, written));
+                let bindings = classify_bindings(gbuffer, &self.materials, &s.trained, &s.dispatch, &s.tiles, written);
+                s.classify.rebind(ctx, &bindings);
+                s.networks.rebind(ctx, &network_bindings(gbuffer, &self.materials, &s.tiles, written));
             }
         }
         Ok(())
@@ -387,12 +407,14 @@ impl NetworkPass {
     ) -> Result<Vec<Pass<'a>>> {
         let extent = self.extent;
         let read = |image| Use::image(image, Access::COMPUTE_READ);
-        let g = [&gbuffer.position, &gbuffer.normal, &gbuffer.object, &gbuffer.emission];
+        let g = [&gbuffer.surface, &gbuffer.id];
+        let materials = Use::buffer(&self.materials, Access::COMPUTE_READ);
         let writes: Vec<Use> =
             self.written(display)?.images().into_iter().map(|image| Use::image(image, Access::COMPUTE_WRITE)).collect();
         Ok(match &self.kind {
             Kind::Storage { pass, weights } => {
                 let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
+                uses.push(materials);
                 uses.push(Use::buffer(weights, Access::COMPUTE_READ));
                 uses.extend(writes);
                 let push = StoragePush { eye: c.eye, light: c.light };
@@ -418,8 +440,8 @@ impl NetworkPass {
                     },
                 );
                 let mut uses = vec![
-                    read(&gbuffer.object),
-                    read(&gbuffer.emission),
+                    read(&gbuffer.id),
+                    materials,
                     Use::buffer(&s.trained, Access::COMPUTE_READ),
                     Use::buffer(&s.dispatch, Access::COMPUTE_READ_WRITE),
                     Use::buffer(&s.tiles, Access::COMPUTE_WRITE),
@@ -435,6 +457,7 @@ impl NetworkPass {
                     s.classify.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
                 });
                 let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
+                uses.push(materials);
                 uses.push(Use::buffer(&s.tiles, Access::COMPUTE_READ));
                 if s.tiled {
                     uses.push(Use::buffer(&s.dispatch, Access::INDIRECT_READ));
@@ -459,6 +482,7 @@ impl NetworkPass {
             }
             Kind::Specialized(s) => s.destroy(ctx),
         }
+        ctx.destroy_buffer(self.materials);
         self.outputs.destroy(ctx);
     }
 }
@@ -486,13 +510,18 @@ impl Destroy for Box<Specialized> {
 }
 
 /// The bindings `network_storage.comp` and `network_specialized_main.glsl` share: the
-/// G-buffer, the variant's buffer (weights or tile lists), then what the pass writes.
-fn network_bindings<'a>(gbuffer: &'a GBufferTargets, buffer: &'a Buffer, written: Written<'a>) -> Vec<Bind<'a>> {
+/// G-buffer and the materials (`network_inputs.glsl`), the variant's buffer (weights or tile
+/// lists), then what the pass writes.
+fn network_bindings<'a>(
+    gbuffer: &'a GBufferTargets,
+    materials: &'a Buffer,
+    buffer: &'a Buffer,
+    written: Written<'a>,
+) -> Vec<Bind<'a>> {
     let mut binds = vec![
-        Bind::StorageImage(&gbuffer.position),
-        Bind::StorageImage(&gbuffer.normal),
-        Bind::StorageImage(&gbuffer.object),
-        Bind::StorageImage(&gbuffer.emission),
+        Bind::StorageImage(&gbuffer.surface),
+        Bind::StorageImage(&gbuffer.id),
+        Bind::StorageBuffer(materials),
         Bind::StorageBuffer(buffer),
     ];
     binds.extend(written.images().into_iter().map(Bind::StorageImage));
@@ -502,14 +531,15 @@ fn network_bindings<'a>(gbuffer: &'a GBufferTargets, buffer: &'a Buffer, written
 /// The bindings of `network_classify_main.glsl`.
 fn classify_bindings<'a>(
     gbuffer: &'a GBufferTargets,
+    materials: &'a Buffer,
     trained: &'a Buffer,
     dispatch: &'a Buffer,
     tiles: &'a Buffer,
     written: Written<'a>,
 ) -> Vec<Bind<'a>> {
     let mut binds = vec![
-        Bind::StorageImage(&gbuffer.object),
-        Bind::StorageImage(&gbuffer.emission),
+        Bind::StorageImage(&gbuffer.id),
+        Bind::StorageBuffer(materials),
         Bind::StorageBuffer(trained),
         Bind::StorageBuffer(dispatch),
         Bind::StorageBuffer(tiles),
@@ -522,6 +552,7 @@ fn storage(
     ctx: &Context,
     spirv: &[u32],
     gbuffer: &GBufferTargets,
+    materials: &Buffer,
     outputs: &NetworkOutputs,
     objects: &[Option<ObjectNetworks>],
 ) -> Result<Kind> {
@@ -538,7 +569,7 @@ fn storage(
         bytemuck::cast_slice(&weights),
         vk::BufferUsageFlags::STORAGE_BUFFER,
     )?);
-    let bindings = network_bindings(gbuffer, &weights, Written::Radiance(outputs));
+    let bindings = network_bindings(gbuffer, materials, &weights, Written::Radiance(outputs));
     let push = std::mem::size_of::<StoragePush>() as u32;
     let pass = ComputePass::new(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE))?;
     Ok(Kind::Storage { pass, weights: weights.keep() })
@@ -565,6 +596,7 @@ fn specialized(
     ctx: &Context,
     shaders: &NetworkShaders,
     gbuffer: &GBufferTargets,
+    materials: &Buffer,
     written: Written,
     objects: &[Option<ObjectNetworks>],
     tiled: bool,
@@ -605,7 +637,7 @@ fn specialized(
         ctx,
         "network tile classification",
         classify_spirv,
-        &classify_bindings(gbuffer, &trained, &dispatch, &tiles, written),
+        &classify_bindings(gbuffer, materials, &trained, &dispatch, &tiles, written),
         std::mem::size_of::<ClassifyPush>() as u32,
         (TILE, TILE),
     )?);
@@ -613,7 +645,7 @@ fn specialized(
         ctx,
         "network (specialization constants)",
         specialized_spirv,
-        &network_bindings(gbuffer, &tiles, written),
+        &network_bindings(gbuffer, materials, &tiles, written),
         std::mem::size_of::<SpecializedPush>() as u32,
         (TILE, TILE),
         &specializations,

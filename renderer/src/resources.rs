@@ -50,6 +50,7 @@ impl Image {
         match self.format {
             vk::Format::R32G32B32A32_SFLOAT => 16,
             vk::Format::R16G16B16A16_SFLOAT => 8,
+            vk::Format::R32G32B32A32_UINT => 16,
             vk::Format::R32_SFLOAT | vk::Format::R32_UINT | vk::Format::D32_SFLOAT => 4,
             vk::Format::R8G8B8A8_UNORM | vk::Format::B8G8R8A8_UNORM => 4,
             _ => 0,
@@ -88,6 +89,7 @@ impl Channel {
             vk::Format::R32G32B32A32_SFLOAT => Some((Channel::F32, 4)),
             vk::Format::R32_SFLOAT => Some((Channel::F32, 1)),
             vk::Format::R32_UINT => Some((Channel::U32, 1)),
+            vk::Format::R32G32B32A32_UINT => Some((Channel::U32, 4)),
             vk::Format::R8G8B8A8_UNORM => Some((Channel::Unorm8, 4)),
             _ => None,
         }
@@ -103,7 +105,8 @@ impl Channel {
     fn decode(self, b: &[u8]) -> f32 {
         match self {
             Channel::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-            Channel::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+            // The bits, unchanged: `f32::to_bits` gives the integer back.
+            Channel::U32 => f32::from_bits(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
             Channel::Unorm8 => f32::from(b[0]) / 255.0,
         }
     }
@@ -341,7 +344,8 @@ impl Context {
     }
 
     /// Reads an image (usage `TRANSFER_SRC`, currently in `layout`) back as floats, row-major,
-    /// all channels; the image is left in `layout`. For set-up and tests; frames read back
+    /// all channels (the bits of integer channels: `f32::to_bits` gives them back); the image is
+    /// left in `layout`. For set-up and tests; frames read back
     /// through [`copy_to_buffer`] passes.
     pub fn read_image(&self, image: &Image, layout: vk::ImageLayout) -> Result<Vec<f32>> {
         let staging = self.create_readback_buffer(image)?;

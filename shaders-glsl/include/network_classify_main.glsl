@@ -13,8 +13,11 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // Object ids the tile list can tell apart; the host checks a scene against it.
 #define MAX_OBJECTS 1024
 
-layout(binding = 0, r32ui) uniform readonly uimage2D gbuffer_object;
-layout(binding = 1, rgba32f) uniform readonly image2D gbuffer_emission;
+#include "gbuffer_layout.glsl"
+
+layout(binding = 0, r32ui) uniform readonly uimage2D gbuffer_id;
+// Per material: rgb emitted radiance, w roughness.
+layout(std430, binding = 1) readonly buffer Materials { vec4 materials[]; };
 // 1 where object (id - 1) has networks.
 layout(binding = 2) readonly buffer Trained { uint trained[]; };
 // VkDispatchIndirectCommand per object: x counts its tiles; y and z are 1.
@@ -48,18 +51,20 @@ void main() {
     barrier();
 
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (all(lessThan(pixel, imageSize(gbuffer_object)))) {
-        uint id = imageLoad(gbuffer_object, pixel).r;
+    if (all(lessThan(pixel, imageSize(gbuffer_id)))) {
+        uint packed = imageLoad(gbuffer_id, pixel).r;
+        uint id = id_object(packed);
         if (id > 0u && trained[id - 1u] != 0u) {
             atomicOr(seen[(id - 1u) / 32u], 1u << ((id - 1u) % 32u));
         } else {
+            vec3 emission = id > 0u && id_front(packed) ? materials[id_material(packed)].rgb : vec3(0.0);
 #ifdef DISPLAY
-            vec3 emitted = constants.shown == 0u ? imageLoad(gbuffer_emission, pixel).rgb : vec3(0.0);
+            vec3 emitted = constants.shown == 0u ? emission : vec3(0.0);
             imageStore(display, pixel, vec4(tonemap(emitted, constants.exposure_scale), 1.0));
 #else
             imageStore(out_direct, pixel, vec4(0.0, 0.0, 0.0, 1.0));
             imageStore(out_indirect, pixel, vec4(0.0, 0.0, 0.0, 1.0));
-            imageStore(out_gi, pixel, vec4(imageLoad(gbuffer_emission, pixel).rgb, 1.0));
+            imageStore(out_gi, pixel, vec4(emission, 1.0));
 #endif
         }
     }

@@ -1,5 +1,6 @@
-// What every network variant shares: the network's shape, its activation, and the 13 raw
-// inputs of a pixel, in the order of `raw_inputs` in baker/src/network.rs.
+// What every network variant shares: the network's shape, its activation, the 13 raw inputs
+// of a pixel (in the order of `raw_inputs` in baker/src/network.rs), and the G-buffer and
+// materials bindings they are read from (bindings 0-2 of every network shader).
 #ifndef RRF_NETWORK_INPUTS_GLSL
 #define RRF_NETWORK_INPUTS_GLSL
 
@@ -7,16 +8,31 @@
 #define HIDDEN1 20
 #define HIDDEN2 10
 
+#include "gbuffer_layout.glsl"
+
+layout(binding = 0, rgba32ui) uniform readonly uimage2D gbuffer_surface;
+layout(binding = 1, r32ui) uniform readonly uimage2D gbuffer_id;
+// Per material: rgb emitted radiance, w roughness.
+layout(std430, binding = 2) readonly buffer Materials { vec4 materials[]; };
+
+// What the pixel's surface emits towards the viewer.
+vec3 surface_emission(uint id) {
+    return id_front(id) ? materials[id_material(id)].rgb : vec3(0.0);
+}
+
 float network_tanh(float x) {
     return tanh(x);
 }
 
-// Position, direction towards the eye, light position, shading normal, roughness.
-float[INPUTS] raw_inputs(vec4 position_roughness, vec3 normal, vec3 eye, vec3 light) {
-    vec3 p = position_roughness.xyz;
+// Position, direction towards the eye, light position, shading normal, roughness, of the
+// surface at `pixel` with G-buffer id `id`.
+float[INPUTS] raw_inputs(ivec2 pixel, uint id, vec3 eye, vec3 light) {
+    uvec4 surface = imageLoad(gbuffer_surface, pixel);
+    vec3 p = uintBitsToFloat(surface.xyz);
+    vec3 n = decode_normal(surface.w);
     vec3 v = normalize(eye - p);
-    return float[INPUTS](p.x, p.y, p.z, v.x, v.y, v.z, light.x, light.y, light.z, normal.x, normal.y, normal.z,
-                         position_roughness.w);
+    float roughness = materials[id_material(id)].w;
+    return float[INPUTS](p.x, p.y, p.z, v.x, v.y, v.z, light.x, light.y, light.z, n.x, n.y, n.z, roughness);
 }
 
 #endif

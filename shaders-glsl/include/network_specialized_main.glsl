@@ -17,17 +17,14 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const uint OBJECT = 1u;
 layout(constant_id = 1) const bool TILED = true;
 
-layout(binding = 0, rgba32f) uniform readonly image2D gbuffer_position;
-layout(binding = 1, rgba32f) uniform readonly image2D gbuffer_normal;
-layout(binding = 2, r32ui) uniform readonly uimage2D gbuffer_object;
-layout(binding = 3, rgba32f) uniform readonly image2D gbuffer_emission;
-layout(binding = 4) readonly buffer Tiles { uint tiles[]; };
+// Bindings 0-2 (G-buffer, materials): network_inputs.glsl.
+layout(binding = 3) readonly buffer Tiles { uint tiles[]; };
 #ifdef DISPLAY
-layout(binding = 5, rgba8) uniform writeonly image2D display;
+layout(binding = 4, rgba8) uniform writeonly image2D display;
 #else
-layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
+layout(binding = 4, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = 5, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = 6, rgba32f) uniform writeonly image2D out_gi;
 #endif
 
 layout(push_constant) uniform Constants {
@@ -52,22 +49,25 @@ void main() {
         tile = uvec2(packed & 0xffffu, packed >> 16);
     }
     ivec2 pixel = ivec2(tile * gl_WorkGroupSize.xy + gl_LocalInvocationID.xy);
-    if (any(greaterThanEqual(pixel, imageSize(gbuffer_object))) || imageLoad(gbuffer_object, pixel).r != OBJECT) {
+    if (any(greaterThanEqual(pixel, imageSize(gbuffer_id)))) {
         return;
     }
-    float x[INPUTS] = raw_inputs(imageLoad(gbuffer_position, pixel), imageLoad(gbuffer_normal, pixel).xyz,
-                                 constants.eye.xyz, constants.light.xyz);
+    uint id = imageLoad(gbuffer_id, pixel).r;
+    if (id_object(id) != OBJECT) {
+        return;
+    }
+    float x[INPUTS] = raw_inputs(pixel, id, constants.eye.xyz, constants.light.xyz);
     vec3 direct = direct_network(x);
     vec3 indirect = indirect_network(x);
 #ifdef DISPLAY
     vec3 shown = constants.shown == 1u ? direct
                : constants.shown == 2u ? indirect
-               : imageLoad(gbuffer_emission, pixel).rgb + direct + indirect;
+               : surface_emission(id) + direct + indirect;
     imageStore(display, pixel, vec4(tonemap(shown, constants.exposure_scale), 1.0));
 #else
     imageStore(out_direct, pixel, vec4(direct, 1.0));
     imageStore(out_indirect, pixel, vec4(indirect, 1.0));
-    imageStore(out_gi, pixel, vec4(imageLoad(gbuffer_emission, pixel).rgb + direct + indirect, 1.0));
+    imageStore(out_gi, pixel, vec4(surface_emission(id) + direct + indirect, 1.0));
 #endif
 }
 

@@ -1,0 +1,51 @@
+// The packed G-buffer, 20 bytes per pixel plus depth, written by gbuffer.frag and read by the
+// network passes; mirrored by renderer/src/gbuffer.rs (`GBufferTexel`).
+//
+//   surface (rgba32ui): xyz the world position's float bits, w the shading normal
+//                       (octahedral, two 16-bit snorms)
+//   id (r32ui):         bits 0-15 object id + 1 (0: nothing drawn), bits 16-30 material,
+//                       bit 31 set when the front face is seen (emitters emit from it only)
+//
+// Emission and roughness are per material, in the materials buffer the passes bind.
+#ifndef RRF_GBUFFER_LAYOUT_GLSL
+#define RRF_GBUFFER_LAYOUT_GLSL
+
+vec2 sign_not_zero(vec2 v) {
+    return vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0);
+}
+
+// A unit vector as two 16-bit snorms on the octahedron (Cigolle et al. 2014).
+uint encode_normal(vec3 n) {
+    vec2 p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if (n.z < 0.0) {
+        p = (1.0 - abs(p.yx)) * sign_not_zero(p);
+    }
+    return packSnorm2x16(p);
+}
+
+vec3 decode_normal(uint packed) {
+    vec2 p = unpackSnorm2x16(packed);
+    vec3 n = vec3(p, 1.0 - abs(p.x) - abs(p.y));
+    if (n.z < 0.0) {
+        n.xy = (1.0 - abs(n.yx)) * sign_not_zero(n.xy);
+    }
+    return normalize(n);
+}
+
+uint encode_id(uint object_plus_one, uint material, bool front) {
+    return (object_plus_one & 0xffffu) | ((material & 0x7fffu) << 16) | (front ? 0x80000000u : 0u);
+}
+
+uint id_object(uint id) {
+    return id & 0xffffu;
+}
+
+uint id_material(uint id) {
+    return (id >> 16) & 0x7fffu;
+}
+
+bool id_front(uint id) {
+    return (id & 0x80000000u) != 0u;
+}
+
+#endif
