@@ -1,5 +1,5 @@
-//! The network's Jacobian against finite differences, and Levenberg–Marquardt on a smooth
-//! synthetic target.
+//! The network's Jacobian against finite differences, Levenberg–Marquardt on a smooth
+//! synthetic target, and training on samples that are not finite.
 
 use rrf_baker::bake::lm::{initial_parameters, train, Dataset, LmSettings};
 use rrf_baker::network::{forward, forward_with_jacobian, INPUTS, OUTPUTS, PARAMETERS};
@@ -74,4 +74,31 @@ fn levenberg_marquardt_fits_a_smooth_function() {
         &LmSettings { max_iterations: 25, patience: 8 },
     );
     assert_eq!(again.params, result.params);
+}
+
+/// Training on data with a non-finite or huge value ends, without a hang, and keeps finite
+/// parameters (before the fix, a failed Cholesky step raised λ forever).
+#[test]
+fn training_on_non_finite_samples_ends() {
+    let cases: [(&str, fn(&mut Dataset)); 4] = [
+        ("NaN target", |d| d.targets[3][1] = f32::NAN),
+        ("infinite input", |d| d.inputs[7][2] = f32::INFINITY),
+        ("huge input", |d| d.inputs[0][6] = 1e38),
+        ("huge inputs everywhere", |d| d.inputs.iter_mut().for_each(|x| x[8] = -1e38)),
+    ];
+    for (what, spoil) in cases {
+        let (done, wait) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let (mut train_set, val_set) = (dataset(300, 1), dataset(100, 2));
+            spoil(&mut train_set);
+            let initial = initial_parameters(5, [0.5, 0.3, 0.2]);
+            let result = train(&train_set, &val_set, initial, &LmSettings { max_iterations: 20, patience: 5 });
+            let _ = done.send(result);
+        });
+        let result = wait
+            .recv_timeout(std::time::Duration::from_secs(120))
+            .unwrap_or_else(|_| panic!("{what}: training did not end within two minutes"));
+        assert!(result.iterations <= 20, "{what}");
+        assert!(result.params.iter().all(|p| p.is_finite()), "{what}: non-finite parameters kept");
+    }
 }

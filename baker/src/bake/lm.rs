@@ -144,6 +144,10 @@ fn normal_equations(train: &Dataset, params: &[f64]) -> (Mat<f64>, Mat<f64>, f64
     (jtj, jte, sse / (train.len() * OUTPUTS).max(1) as f64)
 }
 
+/// The damping past which Levenberg–Marquardt gives up: the step is then a vanishing
+/// gradient-descent step.
+const LAMBDA_MAX: f64 = 1e10;
+
 pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings: &LmSettings) -> LmResult {
     let start = Instant::now();
     let to_f32 = |p: &[f64]| p.iter().map(|&v| v as f32).collect::<Vec<f32>>();
@@ -156,8 +160,20 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
     let mut iterations = 0;
     'outer: while iterations < settings.max_iterations && since_best < settings.patience {
         iterations += 1;
-        let (jtj, jte, loss) = normal_equations(train, &params);
+        let (jtj, jte, _) = normal_equations(train, &params);
+        // Non-finite samples make non-finite normal equations: no step can be trusted, so
+        // training stops with the best parameters so far.
+        let finite = |m: &Mat<f64>| (0..m.nrows()).all(|i| (0..m.ncols()).all(|j| m[(i, j)].is_finite()));
+        if !finite(&jtj) || !finite(&jte) {
+            break;
+        }
+        // Steps are accepted on the loss of the f32 network that is kept, in one precision.
+        let loss = train.mse(&to_f32(&params));
         loop {
+            // Every retry raises λ; past the limit no step helps and training stops.
+            if lambda > LAMBDA_MAX {
+                break 'outer;
+            }
             let mut a = jtj.clone();
             for i in 0..PARAMETERS {
                 a[(i, i)] += lambda;
@@ -175,9 +191,6 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
                 break;
             }
             lambda *= 10.0;
-            if lambda > 1e10 {
-                break 'outer;
-            }
         }
         let current = to_f32(&params);
         let val = validation.mse(&current);
