@@ -80,7 +80,8 @@ fn levenberg_marquardt_fits_a_smooth_function() {
 /// parameters (before the fix, a failed Cholesky step raised λ forever).
 #[test]
 fn training_on_non_finite_samples_ends() {
-    let cases: [(&str, fn(&mut Dataset)); 4] = [
+    type Spoil = fn(&mut Dataset);
+    let cases: [(&str, Spoil); 4] = [
         ("NaN target", |d| d.targets[3][1] = f32::NAN),
         ("infinite input", |d| d.inputs[7][2] = f32::INFINITY),
         ("huge input", |d| d.inputs[0][6] = 1e38),
