@@ -7,24 +7,66 @@ use anyhow::{bail, Context, Result};
 use rrf_baker::glam::Vec3;
 use rrf_renderer::tonemap::tonemap;
 
+/// What an image output path holds, by its extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageKind {
+    Exr,
+    Png,
+}
+
+/// Checks an output path before any work starts: a `.exr` or `.png` name in a folder that
+/// exists.
+pub fn check_output(path: &Path) -> Result<ImageKind> {
+    let kind = match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("exr") => ImageKind::Exr,
+        Some("png") => ImageKind::Png,
+        _ => bail!("{}: the output must end in .exr (linear HDR) or .png (tonemapped)", path.display()),
+    };
+    let folder = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !folder.is_dir() {
+        bail!("{}: the folder {} does not exist", path.display(), folder.display());
+    }
+    Ok(kind)
+}
+
 /// Writes `pixels` (rows top to bottom, linear RGB) to `path`: EXR for `.exr`, tonemapped
-/// PNG for `.png`, with `exposure` in stops for the PNG.
+/// PNG for `.png`, with `exposure` in stops for the PNG. The image goes to a temporary file
+/// beside `path` that is then renamed, so a failed or interrupted write never leaves a
+/// half-written image where a good one was.
 pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Vec3], exposure: f32) -> Result<()> {
-    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
-        Some("exr") => {
+    let kind = check_output(path)?;
+    write_atomically(path, |tmp| write_kind(kind, tmp, width, height, pixels, exposure))
+}
+
+/// Runs `write` on a temporary file beside `path` (same extension, so that encoders that go
+/// by it still work), then renames it to `path`; on failure removes it and leaves `path` as
+/// it was.
+pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("tmp");
+    let tmp = path.with_extension(format!("partial.{extension}"));
+    let written = write(&tmp)
+        .and_then(|()| std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display())));
+    if written.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    written
+}
+
+fn write_kind(kind: ImageKind, path: &Path, width: u32, height: u32, pixels: &[Vec3], exposure: f32) -> Result<()> {
+    match kind {
+        ImageKind::Exr => {
             exr::prelude::write_rgb_file(path, width as usize, height as usize, |x, y| {
                 let p = pixels[y * width as usize + x];
                 (p.x, p.y, p.z)
             })
             .with_context(|| format!("cannot write {}", path.display()))?;
         }
-        Some("png") => {
+        ImageKind::Png => {
             image::RgbImage::from_raw(width, height, tonemap_rgb8(pixels, exposure))
                 .context("image size does not match its pixels")?
                 .save(path)
                 .with_context(|| format!("cannot write {}", path.display()))?;
         }
-        _ => bail!("{}: the output must end in .exr (linear HDR) or .png (tonemapped)", path.display()),
     }
     Ok(())
 }

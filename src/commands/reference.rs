@@ -10,7 +10,7 @@ use rrf_baker::trace::{render, Camera, Geometry, RenderSettings, TraceSettings, 
 use serde_json::json;
 
 use super::view_args::{Component, ViewArgs};
-use crate::image_out::write_image;
+use crate::image_out::{check_output, write_image};
 use crate::progress::Progress;
 
 #[derive(Args, Debug)]
@@ -42,6 +42,7 @@ pub struct ReferenceArgs {
 
 pub fn run(args: &ReferenceArgs) -> Result<()> {
     let (width, height) = args.view.size()?;
+    check_output(&args.output)?;
     if args.spp == 0 {
         anyhow::bail!("--spp must be at least 1");
     }

@@ -16,7 +16,7 @@ use super::bake::default_model_path;
 use super::variant::VariantArg;
 use super::view_args::{Component, ViewArgs};
 use crate::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
-use crate::image_out::write_image;
+use crate::image_out::{check_output, write_image};
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
@@ -42,6 +42,7 @@ pub struct RenderArgs {
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     let (width, height) = args.view.size()?;
+    check_output(&args.output)?;
     let scene = Scene::load(&args.view.scene)?;
     let model_path = args.model.clone().unwrap_or_else(|| default_model_path(&scene));
     let model = Model::load(&model_path, Some(&scene))?;

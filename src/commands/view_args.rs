@@ -25,8 +25,8 @@ pub struct ViewArgs {
     /// Image size in pixels.
     #[arg(long, default_value = "256x256", value_name = "WxH")]
     pub size: String,
-    /// Exposure in stops for PNG output (EXR is always linear).
-    #[arg(long, default_value_t = 0.0)]
+    /// Exposure in stops for PNG output (EXR is always linear), between -20 and 20.
+    #[arg(long, default_value_t = 0.0, value_parser = parse_exposure, allow_hyphen_values = true)]
     pub exposure: f32,
 }
 
@@ -64,6 +64,14 @@ pub fn named_view(scene: &Scene, name: Option<&str>) -> Result<View> {
         let names = scene.views.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ");
         format!("--view {name:?}: no such view in {} (views: {names})", scene.name)
     })
+}
+
+/// Stops of exposure: a finite number between -20 and 20.
+pub fn parse_exposure(text: &str) -> Result<f32, String> {
+    match text.trim().parse::<f32>() {
+        Ok(v) if v.is_finite() && v.abs() <= 20.0 => Ok(v),
+        _ => Err(format!("{text:?} is not a number of stops between -20 and 20")),
+    }
 }
 
 /// `WxH`, each between 1 and 16384.

@@ -18,6 +18,7 @@ use rrf_renderer::{vk, Context, Image};
 use super::state::ViewerState;
 use super::stats::Stats;
 use crate::gpu_frame::{FrameOutput, GpuFrame, TIMESTAMPS};
+use crate::image_out::write_atomically;
 
 /// A window's surface and its swapchain, remade when the window's size changes.
 pub struct Presenter {
@@ -281,9 +282,9 @@ pub fn save_png(path: &std::path::Path, extent: vk::Extent2D, rgba: &[f32]) -> R
     let rgb: Vec<u8> =
         rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).map(|c| (c * 255.0).round() as u8).collect();
     let image = image::RgbImage::from_raw(extent.width, extent.height, rgb).context("screenshot size mismatch")?;
-    let tmp = path.with_extension("png.partial");
-    image
-        .save_with_format(&tmp, image::ImageFormat::Png)
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(image::ImageError::IoError))
-        .with_context(|| format!("cannot write screenshot {}", path.display()))
+    write_atomically(path, |tmp| {
+        image
+            .save_with_format(tmp, image::ImageFormat::Png)
+            .with_context(|| format!("cannot write screenshot {}", path.display()))
+    })
 }

@@ -1,0 +1,63 @@
+//! Output paths and display flags are checked before any work starts, and images are written
+//! whole or not at all.
+
+mod common;
+
+use common::rrf;
+
+#[test]
+fn bad_outputs_fail_before_any_work_and_name_the_problem() {
+    let dir = std::env::temp_dir().join(format!("rrf-outputs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let jpg = dir.join("frame.jpg");
+    let missing = dir.join("no-such-folder").join("frame.png");
+    for command in ["render", "reference"] {
+        for (output, needle) in [(&jpg, ".exr (linear HDR) or .png"), (&missing, "does not exist")] {
+            let run = rrf(&[command, "scenes/cornell-box", "-o", output.to_str().unwrap()], &[]);
+            let stderr = String::from_utf8_lossy(&run.stderr);
+            assert!(!run.status.success(), "{command} -o {}", output.display());
+            assert!(stderr.contains(needle) && stderr.contains(output.to_str().unwrap()), "{command}: {stderr}");
+            // Nothing was rendered: no progress, no Vulkan device chosen.
+            assert!(!stderr.contains("wrote"), "{stderr}");
+        }
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn exposure_must_be_a_finite_number_of_stops() {
+    for bad in ["nan", "inf", "-1e9", "bright"] {
+        let run = rrf(&["render", "scenes/cornell-box", "--exposure", bad, "-o", "x.png"], &[]);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success() && stderr.contains("between -20 and 20"), "--exposure {bad}: {stderr}");
+    }
+}
+
+#[test]
+fn images_are_replaced_whole() {
+    let dir = std::env::temp_dir().join(format!("rrf-atomic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("frame.png");
+    for exposure in ["0", "-1.5"] {
+        let run = rrf(
+            &[
+                "render",
+                "scenes/cornell-box",
+                "--cpu",
+                "--size",
+                "16x16",
+                "--exposure",
+                exposure,
+                "-o",
+                out.to_str().unwrap(),
+            ],
+            &[],
+        );
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    }
+    let names: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    assert_eq!(names, ["frame.png"], "no temporary file is left beside the image");
+    assert_eq!(image::open(&out).unwrap().to_rgb8().dimensions(), (16, 16));
+    std::fs::remove_dir_all(dir).unwrap();
+}
