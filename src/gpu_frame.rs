@@ -20,7 +20,7 @@ use rrf_renderer::sync::{run_passes, Pass, Resource, ResourceStates};
 use rrf_renderer::tonemap::TonemapPass;
 use rrf_renderer::{vk, Context, Destroy, Image};
 
-use crate::gpu_scene::{gbuffer_constants, gbuffer_materials, gbuffer_vertices, moving_light_object};
+use crate::gpu_scene::{gbuffer_constants, gbuffer_materials, gbuffer_mesh, moving_light_object};
 use crate::shaders;
 
 /// Each object's networks, by object id; `None` for objects the model has none for.
@@ -143,7 +143,8 @@ impl GpuFrame {
     ) -> Result<Self> {
         // Each part is destroyed again if a later one cannot be made.
         let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
-        let mesh = ctx.guard(GBufferMesh::new(ctx, &gbuffer_vertices(scene))?);
+        let (vertices, indices) = gbuffer_mesh(scene);
+        let mesh = ctx.guard(GBufferMesh::new(ctx, &vertices, &indices)?);
         let gbuffer = ctx.guard(GBufferPass::new(ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG)?);
         let network_shaders = NetworkShaders {
             storage: shaders::NETWORK_STORAGE_COMP,

@@ -13,25 +13,35 @@ pub fn moving_light_object(scene: &Scene) -> Option<u32> {
     }
 }
 
-/// Every triangle of the scene, vertex by vertex, where the glTF puts it; the moving light's
-/// geometry follows the light through [`GBufferConstants::light_offset`].
-pub fn gbuffer_vertices(scene: &Scene) -> Vec<GBufferVertex> {
-    let mut out = Vec::with_capacity(scene.triangle_count() * 3);
+/// The scene's vertices where the glTF puts them, and its triangles as indices into them; the
+/// moving light's geometry follows the light through [`GBufferConstants::light_offset`]. A
+/// vertex is shared by the triangles of one object part (one material).
+pub fn gbuffer_mesh(scene: &Scene) -> (Vec<GBufferVertex>, Vec<u32>) {
+    let mut vertices = Vec::new();
+    let mut indices = Vec::with_capacity(scene.triangle_count() * 3);
     for object in &scene.objects {
+        // Where each of the object's vertices went in this part, or u32::MAX.
+        let mut placed = vec![u32::MAX; object.positions.len()];
         for part in &object.parts {
+            placed.fill(u32::MAX);
             for t in part.triangles.clone() {
                 for &v in &object.triangles[t as usize] {
-                    out.push(GBufferVertex {
-                        position: object.positions[v as usize].to_array(),
-                        normal: object.normals[v as usize].to_array(),
-                        object: object.id,
-                        material: part.material,
-                    });
+                    let slot = &mut placed[v as usize];
+                    if *slot == u32::MAX {
+                        *slot = vertices.len() as u32;
+                        vertices.push(GBufferVertex {
+                            position: object.positions[v as usize].to_array(),
+                            normal: object.normals[v as usize].to_array(),
+                            object: object.id,
+                            material: part.material,
+                        });
+                    }
+                    indices.push(*slot);
                 }
             }
         }
     }
-    out
+    (vertices, indices)
 }
 
 /// Each material's emitted radiance (rgb) and roughness, as the network pass reads them.

@@ -5,7 +5,7 @@ mod common;
 use std::path::Path;
 
 use common::{finish_clean, gpu};
-use rrf::gpu_scene::{gbuffer_constants, gbuffer_vertices};
+use rrf::gpu_scene::{gbuffer_constants, gbuffer_mesh};
 use rrf::shaders;
 use rrf_baker::glam::{Vec2, Vec3};
 use rrf_baker::scene::Scene;
@@ -21,7 +21,8 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
     let ctx = gpu();
     let extent = vk::Extent2D { width, height };
     let targets = GBufferTargets::new(&ctx, extent).unwrap();
-    let mesh = GBufferMesh::new(&ctx, &gbuffer_vertices(&scene)).unwrap();
+    let (vertices, indices) = gbuffer_mesh(&scene);
+    let mesh = GBufferMesh::new(&ctx, &vertices, &indices).unwrap();
     let pass = GBufferPass::new(&ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG).unwrap();
     ctx.submit_once(|cmd| pass.record(&ctx, cmd, &targets, &mesh, &gbuffer_constants(&view, aspect, Vec3::ZERO, None)))
         .unwrap();

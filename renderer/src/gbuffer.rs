@@ -7,12 +7,12 @@ use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 
 use crate::context::Context;
-use crate::error::{Result, VkContext};
+use crate::error::{Error, Result, VkContext};
 use crate::guard::Destroy;
 use crate::resources::{Buffer, Image};
 use crate::sync::{Access, Pass, ResourceStates, Use};
 
-/// One vertex, in world space. Triangles are listed vertex by vertex (no index buffer).
+/// One vertex, in world space; triangles index them (`GBufferMesh`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GBufferVertex {
@@ -130,19 +130,30 @@ impl Destroy for GBufferTargets {
 
 /// The scene's triangles on the GPU.
 pub struct GBufferMesh {
+    /// The vertices, then the triangles' indices from `index_offset`.
     buffer: Buffer,
-    vertex_count: u32,
+    index_offset: u64,
+    index_count: u32,
 }
 
 impl GBufferMesh {
-    pub fn new(ctx: &Context, vertices: &[GBufferVertex]) -> Result<Self> {
-        let bytes: &[u8] = bytemuck::cast_slice(vertices);
+    /// The mesh of `vertices` and the triangles that `indices` (three per triangle) make of
+    /// them. Shared vertices are shaded once where the driver caches them.
+    pub fn new(ctx: &Context, vertices: &[GBufferVertex], indices: &[u32]) -> Result<Self> {
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= vertices.len()) {
+            return Err(Error::Invalid(format!("mesh index {bad} is past its {} vertices", vertices.len())));
+        }
+        let mut bytes: Vec<u8> = bytemuck::cast_slice(vertices).to_vec();
+        let index_offset = bytes.len() as u64;
+        bytes.extend_from_slice(bytemuck::cast_slice(indices));
         let staging =
-            ctx.guard(ctx.create_buffer_with_data("mesh staging", bytes, vk::BufferUsageFlags::TRANSFER_SRC)?);
+            ctx.guard(ctx.create_buffer_with_data("mesh staging", &bytes, vk::BufferUsageFlags::TRANSFER_SRC)?);
         let buffer = ctx.guard(ctx.create_buffer(
-            "scene vertices",
+            "scene mesh",
             bytes.len() as u64,
-            vk::BufferUsageFlags::VERTEX_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            vk::BufferUsageFlags::VERTEX_BUFFER
+                | vk::BufferUsageFlags::INDEX_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?);
         ctx.submit_once(|cmd| {
@@ -150,7 +161,7 @@ impl GBufferMesh {
             // SAFETY: both buffers hold at least `bytes.len()` bytes.
             unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &[region]) };
         })?;
-        Ok(GBufferMesh { buffer: buffer.keep(), vertex_count: vertices.len() as u32 })
+        Ok(GBufferMesh { buffer: buffer.keep(), index_offset, index_count: indices.len() as u32 })
     }
 
     pub fn destroy(self, ctx: &Context) {
@@ -281,7 +292,7 @@ impl GBufferPass {
         let mut uses: Vec<Use> =
             targets.colors().iter().map(|i| Use::image(i, Access::COLOR_ATTACHMENT_WRITE)).collect();
         uses.push(Use::image(&targets.depth, Access::DEPTH_ATTACHMENT));
-        uses.push(Use::buffer(&mesh.buffer, Access::VERTEX_READ));
+        uses.push(Use::buffer(&mesh.buffer, Access::VERTEX_INDEX_READ));
         Pass::new("gbuffer", uses, move |cmd| self.record(ctx, cmd, targets, mesh, &constants))
     }
 
@@ -337,7 +348,8 @@ impl GBufferPass {
             device.cmd_set_scissor(cmd, 0, &[area]);
             device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::VERTEX, 0, bytemuck::bytes_of(camera));
             device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.buffer.raw], &[0]);
-            device.cmd_draw(cmd, mesh.vertex_count, 1, 0, 0);
+            device.cmd_bind_index_buffer(cmd, mesh.buffer.raw, mesh.index_offset, vk::IndexType::UINT32);
+            device.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
             device.cmd_end_rendering(cmd);
         }
     }

@@ -68,9 +68,12 @@ impl Access {
         ),
         vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL,
     );
-    pub const VERTEX_READ: Access = Access::new(
-        vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT,
-        vk::AccessFlags2::VERTEX_ATTRIBUTE_READ,
+    /// Vertex attributes and indices read by a draw.
+    pub const VERTEX_INDEX_READ: Access = Access::new(
+        vk::PipelineStageFlags2::VERTEX_INPUT,
+        vk::AccessFlags2::from_raw(
+            vk::AccessFlags2::VERTEX_ATTRIBUTE_READ.as_raw() | vk::AccessFlags2::INDEX_READ.as_raw(),
+        ),
         vk::ImageLayout::UNDEFINED,
     );
     pub const INDIRECT_READ: Access = Access::new(
