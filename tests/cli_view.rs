@@ -7,7 +7,7 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::rrf;
+use common::{difference, rrf};
 
 fn temp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("rrf-view-{}-{name}", std::process::id()))
@@ -15,19 +15,6 @@ fn temp(name: &str) -> PathBuf {
 
 fn load(path: &Path) -> image::RgbImage {
     image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8()
-}
-
-/// Pixels that differ by more than `levels` in some channel, and the mean difference.
-fn difference(a: &image::RgbImage, b: &image::RgbImage, levels: u8) -> (usize, f64) {
-    assert_eq!(a.dimensions(), b.dimensions());
-    let mut off = 0;
-    let mut total = 0u64;
-    for (p, q) in a.pixels().zip(b.pixels()) {
-        let d = p.0.iter().zip(q.0).map(|(&x, y)| x.abs_diff(y)).max().unwrap();
-        off += usize::from(d > levels);
-        total += u64::from(d);
-    }
-    (off, total as f64 / (a.width() * a.height()) as f64)
 }
 
 /// Runs `rrf ARGS` in a window on a fresh Xvfb display (`xvfb-run`, which `cargo xtask

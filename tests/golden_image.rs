@@ -8,7 +8,7 @@ mod common;
 
 use std::path::Path;
 
-use common::rrf;
+use common::{difference, rrf};
 
 const SIZE: &str = "128x128";
 /// Largest difference in 8-bit levels that most pixels may show (rounding, fma, tanh).
@@ -33,16 +33,8 @@ fn cornell_box_matches_the_golden_image() {
     }
     let (new, old) = (load(&out), load(&golden));
     let _ = std::fs::remove_file(&out);
-    assert_eq!(new.dimensions(), old.dimensions());
-    let mut off = 0;
-    let mut total = 0u64;
-    for (a, b) in new.pixels().zip(old.pixels()) {
-        let d = a.0.iter().zip(b.0).map(|(&x, y)| x.abs_diff(y)).max().unwrap();
-        off += usize::from(d > LEVELS);
-        total += u64::from(d);
-    }
+    let (off, mean) = difference(&new, &old, LEVELS);
     let n = (new.width() * new.height()) as usize;
-    let mean = total as f64 / n as f64;
     eprintln!("{off} of {n} pixels differ by more than {LEVELS} levels; mean difference {mean:.3}");
     assert!(off * 1000 <= n, "{off} of {n} pixels differ from the golden image by more than {LEVELS} levels");
     assert!(mean < 0.5, "mean difference {mean:.3} levels");

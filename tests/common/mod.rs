@@ -36,3 +36,17 @@ pub fn rrf(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
     }
     cmd.output().expect("run rrf")
 }
+
+/// Pixels of two RGB images that differ by more than `levels` in some channel, and the mean
+/// of the largest channel difference per pixel.
+pub fn difference(a: &image::RgbImage, b: &image::RgbImage, levels: u8) -> (usize, f64) {
+    assert_eq!(a.dimensions(), b.dimensions());
+    let mut off = 0;
+    let mut total = 0u64;
+    for (p, q) in a.pixels().zip(b.pixels()) {
+        let d = p.0.iter().zip(q.0).map(|(&x, y)| x.abs_diff(y)).max().unwrap_or(0);
+        off += usize::from(d > levels);
+        total += u64::from(d);
+    }
+    (off, total as f64 / (a.width() * a.height()) as f64)
+}
