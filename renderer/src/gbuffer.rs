@@ -133,7 +133,71 @@ pub struct GBufferMesh {
     /// The vertices, then the triangles' indices from `index_offset`.
     buffer: Buffer,
     index_offset: u64,
+    /// One draw per run of an object's triangles, culled against the view each frame.
+    draws: Vec<Draw>,
+}
+
+/// A run of one object's triangles in the index buffer, with its bounds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Draw {
+    object: u32,
+    first_index: u32,
     index_count: u32,
+    min: [f32; 3],
+    max: [f32; 3],
+}
+
+impl Draw {
+    /// The runs of `indices` (whole triangles) that belong to one object each.
+    fn runs(vertices: &[GBufferVertex], indices: &[u32]) -> Vec<Draw> {
+        let mut draws: Vec<Draw> = Vec::new();
+        for (t, triangle) in indices.chunks_exact(3).enumerate() {
+            let object = vertices[triangle[0] as usize].object;
+            let draw = match draws.last_mut() {
+                Some(d) if d.object == object => d,
+                _ => {
+                    draws.push(Draw {
+                        object,
+                        first_index: 3 * t as u32,
+                        index_count: 0,
+                        min: [f32::INFINITY; 3],
+                        max: [f32::NEG_INFINITY; 3],
+                    });
+                    draws.last_mut().expect("just pushed")
+                }
+            };
+            draw.index_count += 3;
+            for &v in triangle {
+                let p = vertices[v as usize].position;
+                for axis in 0..3 {
+                    draw.min[axis] = draw.min[axis].min(p[axis]);
+                    draw.max[axis] = draw.max[axis].max(p[axis]);
+                }
+            }
+        }
+        draws
+    }
+
+    /// Whether any of the run's bounds can be in the view of `c` (conservative: a box is
+    /// culled only when all its corners are outside one plane of the clip volume).
+    fn visible(&self, c: &GBufferConstants) -> bool {
+        let offset = if self.object + 1 == c.light_object { c.light_offset } else { [0.0; 4] };
+        let m = &c.view_projection;
+        let mut outside = [true; 6];
+        for corner in 0..8 {
+            let pick = |axis: usize| {
+                let v = if corner & (1 << axis) == 0 { self.min[axis] } else { self.max[axis] };
+                v + offset[axis]
+            };
+            let p = [pick(0), pick(1), pick(2), 1.0];
+            let clip: [f32; 4] = std::array::from_fn(|row| (0..4).map(|col| m[col][row] * p[col]).sum());
+            let (x, y, z, w) = (clip[0], clip[1], clip[2], clip[3]);
+            for (plane, beyond) in [x > w, x < -w, y > w, y < -w, z < 0.0, z > w].into_iter().enumerate() {
+                outside[plane] &= beyond;
+            }
+        }
+        !outside.contains(&true)
+    }
 }
 
 impl GBufferMesh {
@@ -161,7 +225,7 @@ impl GBufferMesh {
             // SAFETY: both buffers hold at least `bytes.len()` bytes.
             unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &[region]) };
         })?;
-        Ok(GBufferMesh { buffer: buffer.keep(), index_offset, index_count: indices.len() as u32 })
+        Ok(GBufferMesh { buffer: buffer.keep(), index_offset, draws: Draw::runs(vertices, indices) })
     }
 
     pub fn destroy(self, ctx: &Context) {
@@ -349,7 +413,10 @@ impl GBufferPass {
             device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::VERTEX, 0, bytemuck::bytes_of(camera));
             device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.buffer.raw], &[0]);
             device.cmd_bind_index_buffer(cmd, mesh.buffer.raw, mesh.index_offset, vk::IndexType::UINT32);
-            device.cmd_draw_indexed(cmd, mesh.index_count, 1, 0, 0, 0);
+            // Objects whose bounds are outside the view cost no vertex work or triangle set-up.
+            for draw in mesh.draws.iter().filter(|d| d.visible(camera)) {
+                device.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0);
+            }
             device.cmd_end_rendering(cmd);
         }
     }
@@ -366,5 +433,50 @@ impl Destroy for GBufferPass {
             ctx.device.destroy_pipeline(self.pipeline, None);
             ctx.device.destroy_pipeline_layout(self.layout, None);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn vertex(position: [f32; 3], object: u32) -> GBufferVertex {
+        GBufferVertex { position, normal: [0.0, 0.0, 1.0], object, material: 0 }
+    }
+
+    /// Identity view-projection: the clip volume is x, y in [-1, 1], z in [0, 1].
+    fn identity(light_object: u32, light_offset: [f32; 4]) -> GBufferConstants {
+        let mut view_projection = [[0.0; 4]; 4];
+        for (i, column) in view_projection.iter_mut().enumerate() {
+            column[i] = 1.0;
+        }
+        GBufferConstants { view_projection, eye: [0.0; 4], light_offset, light_object, pad: [0; 3] }
+    }
+
+    #[test]
+    fn runs_split_by_object_and_cull_outside_the_view() {
+        let vertices = [
+            vertex([0.0, 0.0, 0.5], 0),
+            vertex([0.1, 0.0, 0.5], 0),
+            vertex([0.0, 0.1, 0.5], 0),
+            vertex([5.0, 5.0, 0.5], 1),
+            vertex([5.1, 5.0, 0.5], 1),
+            vertex([5.0, 5.1, 0.5], 1),
+        ];
+        let draws = Draw::runs(&vertices, &[0, 1, 2, 3, 4, 5, 2, 1, 0]);
+        assert_eq!(draws.len(), 3, "object 0, object 1, object 0 again");
+        assert_eq!((draws[1].first_index, draws[1].index_count), (3, 3));
+        assert_eq!(draws[1].min, [5.0, 5.0, 0.5]);
+        let view = identity(0, [0.0; 4]);
+        assert!(draws[0].visible(&view) && !draws[1].visible(&view));
+        // The moving light's object follows its offset, into the view here.
+        let moved = identity(2, [-5.0, -5.0, 0.0, 0.0]);
+        assert!(draws[1].visible(&moved));
+        // Behind the near plane.
+        let behind = Draw::runs(&[vertex([0.0, 0.0, -1.0], 0); 3], &[0, 1, 2]);
+        assert!(!behind[0].visible(&view));
+        // A box around the whole view is visible though no corner is inside.
+        let around = [vertex([-9.0, -9.0, -9.0], 0), vertex([9.0, 9.0, 9.0], 0), vertex([9.0, -9.0, 0.5], 0)];
+        assert!(Draw::runs(&around, &[0, 1, 2])[0].visible(&view));
     }
 }
