@@ -169,10 +169,8 @@ impl Draw {
             draw.index_count += 3;
             for &v in triangle {
                 let p = vertices[v as usize].position;
-                for axis in 0..3 {
-                    draw.min[axis] = draw.min[axis].min(p[axis]);
-                    draw.max[axis] = draw.max[axis].max(p[axis]);
-                }
+                draw.min = std::array::from_fn(|axis| draw.min[axis].min(p[axis]));
+                draw.max = std::array::from_fn(|axis| draw.max[axis].max(p[axis]));
             }
         }
         draws
