@@ -64,6 +64,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    quiet_on_closed_stdout();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info { scene, json } => rrf::commands::info::run(scene.as_deref(), json),
@@ -80,5 +81,17 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+/// A reader that stops early (`rrf info SCENE | head`) ends rrf quietly, as it does other
+/// command-line tools, instead of making every later print panic: Rust ignores SIGPIPE by
+/// default, and this restores the usual behaviour.
+fn quiet_on_closed_stdout() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any other thread exists; SIG_DFL is a valid
+    // disposition for SIGPIPE.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }

@@ -61,3 +61,22 @@ fn images_are_replaced_whole() {
     assert_eq!(image::open(&out).unwrap().to_rgb8().dimensions(), (16, 16));
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// `rrf info SCENE | head -1`: a reader that stops early ends rrf quietly, not with a panic.
+#[test]
+fn a_closed_standard_output_ends_quietly() {
+    use std::io::Read;
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_rrf"))
+        .args(["info", "scenes/many-objects"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Closed before rrf prints anything, so that every print meets the closed pipe.
+    drop(child.stdout.take());
+    let mut stderr = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut stderr).unwrap();
+    child.wait().unwrap();
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
