@@ -192,12 +192,6 @@ impl ResourceStates {
         self.states.insert(Resource::image(image), State { layout, ..State::default() });
     }
 
-    /// Forgets `resource`: its next use starts from `UNDEFINED` (its contents are discarded).
-    /// For resources that are destroyed.
-    pub fn forget(&mut self, resource: Resource) {
-        self.states.remove(&resource);
-    }
-
     /// Records that `image` arrives from outside the queue's command stream, such as a
     /// swapchain image whose acquire semaphore the submission waits for at `stage`: its first
     /// use is ordered after that stage, and its contents are discarded.

@@ -34,10 +34,6 @@ impl Presenter {
         Presenter { surface: Some(surface), swapchain: None, present_mode, stale: true }
     }
 
-    pub fn present_mode(&self) -> Option<vk::PresentModeKHR> {
-        self.swapchain.as_ref().map(|s| s.present_mode)
-    }
-
     /// Destroys the swapchain and the surface; no frame may be pending.
     pub fn destroy(mut self, ctx: &Context) {
         if let Some(s) = self.swapchain.take() {
@@ -118,6 +114,13 @@ impl Renderer {
             if new.extent.width == 0 || new.extent.height == 0 {
                 new.destroy(ctx);
                 return Ok(false);
+            }
+            if new.present_mode != presenter.present_mode {
+                eprintln!(
+                    "warning: the display does not offer present mode {:?}; using {:?}",
+                    presenter.present_mode, new.present_mode
+                );
+                presenter.present_mode = new.present_mode;
             }
             let extent = new.extent;
             presenter.swapchain = Some(new);
