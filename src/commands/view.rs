@@ -157,8 +157,10 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         bail!("--screenshot saves the last frame of a run that ends by itself: add --frames N or --script FILE (in the window, P saves a screenshot)");
     }
     if event_loop.is_none() && !plan.scripted() {
+        // One picture of the scene: an overlay of one frame's statistics would say nothing.
         plan.frames = Some(1);
         plan.screenshot.get_or_insert_with(|| PathBuf::from("view.png"));
+        state.overlay = false;
     }
 
     let mut options = ContextOptions::from_env();
