@@ -233,6 +233,16 @@ enum Written<'a> {
 }
 
 impl<'a> Written<'a> {
+    /// What a pass with `outputs` (`None` for a display pass) writes, given the display image
+    /// the caller passes: a display image goes with, and only with, a display pass.
+    fn of(outputs: &'a Option<NetworkOutputs>, display: Option<&'a Image>) -> Result<Self> {
+        match (outputs, display) {
+            (Some(o), None) => Ok(Written::Radiance(o)),
+            (None, Some(image)) => Ok(Written::Display(image)),
+            _ => Err(Error::Invalid("a display image goes with, and only with, a display network pass".into())),
+        }
+    }
+
     fn images(self) -> Vec<&'a Image> {
         match self {
             Written::Radiance(o) => o.all().to_vec(),
@@ -307,11 +317,7 @@ impl NetworkPass {
             None => Some(NetworkOutputs::new(ctx, gbuffer.extent)?),
         };
         let outputs = ctx.guard(outputs);
-        let written = match (display, outputs.as_ref()) {
-            (Some(image), _) => Written::Display(image),
-            (None, Some(o)) => Written::Radiance(o),
-            (None, None) => unreachable!("outputs are made when there is no display image"),
-        };
+        let written = Written::of(&outputs, display)?;
         let kind = match variant {
             Variant::Storage => match written {
                 Written::Radiance(o) => storage(ctx, shaders.storage, gbuffer, &materials, o, objects)?,
@@ -337,14 +343,6 @@ impl NetworkPass {
         self.outputs.as_ref()
     }
 
-    fn written<'a>(&'a self, display: Option<&'a Image>) -> Result<Written<'a>> {
-        match (&self.outputs, display) {
-            (Some(o), None) => Ok(Written::Radiance(o)),
-            (None, Some(image)) => Ok(Written::Display(image)),
-            _ => Err(Error::Invalid("a display image goes with, and only with, a display network pass".into())),
-        }
-    }
-
     pub fn variant(&self) -> Variant {
         self.variant
     }
@@ -361,7 +359,7 @@ impl NetworkPass {
     /// pipelines stay. No frame that uses the pass may be pending. On failure the pass keeps
     /// its old resources.
     pub fn resize(&mut self, ctx: &Context, gbuffer: &GBufferTargets, display: Option<&Image>) -> Result<()> {
-        self.written(display)?;
+        Written::of(&self.outputs, display)?;
         let extent = gbuffer.extent;
         let outputs = match &self.outputs {
             Some(_) => Some(NetworkOutputs::new(ctx, extent)?),
@@ -374,11 +372,7 @@ impl NetworkPass {
         };
         std::mem::replace(&mut self.outputs, outputs.keep()).destroy(ctx);
         self.extent = extent;
-        let written = match (&self.outputs, display) {
-            (Some(o), _) => Written::Radiance(o),
-            (None, Some(image)) => Written::Display(image),
-            (None, None) => unreachable!("checked by `written` above"),
-        };
+        let written = Written::of(&self.outputs, display)?;
         match &mut self.kind {
             Kind::Storage { pass, weights } => {
                 pass.rebind(ctx, &network_bindings(gbuffer, &self.materials, weights, written))
@@ -409,8 +403,11 @@ impl NetworkPass {
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let g = [&gbuffer.surface, &gbuffer.id];
         let materials = Use::buffer(&self.materials, Access::COMPUTE_READ);
-        let writes: Vec<Use> =
-            self.written(display)?.images().into_iter().map(|image| Use::image(image, Access::COMPUTE_WRITE)).collect();
+        let writes: Vec<Use> = Written::of(&self.outputs, display)?
+            .images()
+            .into_iter()
+            .map(|image| Use::image(image, Access::COMPUTE_WRITE))
+            .collect();
         Ok(match &self.kind {
             Kind::Storage { pass, weights } => {
                 let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
@@ -480,7 +477,7 @@ impl NetworkPass {
                 pass.destroy(ctx);
                 ctx.destroy_buffer(weights);
             }
-            Kind::Specialized(s) => s.destroy(ctx),
+            Kind::Specialized(s) => Destroy::destroy(*s, ctx),
         }
         ctx.destroy_buffer(self.materials);
         self.outputs.destroy(ctx);
@@ -500,12 +497,6 @@ impl Destroy for Specialized {
         for buffer in [self.trained, self.dispatch, self.tiles] {
             ctx.destroy_buffer(buffer);
         }
-    }
-}
-
-impl Destroy for Box<Specialized> {
-    fn destroy(self, ctx: &Context) {
-        (*self).destroy(ctx);
     }
 }
 

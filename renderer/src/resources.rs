@@ -270,20 +270,6 @@ impl Context {
         };
     }
 
-    /// Makes writes by `src` stages visible to reads and writes by `dst` stages.
-    pub fn memory_barrier(
-        &self,
-        cmd: vk::CommandBuffer,
-        src: (vk::PipelineStageFlags, vk::AccessFlags),
-        dst: (vk::PipelineStageFlags, vk::AccessFlags),
-    ) {
-        let barrier = vk::MemoryBarrier::default().src_access_mask(src.1).dst_access_mask(dst.1);
-        // SAFETY: `cmd` is recording outside a render pass instance.
-        unsafe {
-            self.device.cmd_pipeline_barrier(cmd, src.0, dst.0, vk::DependencyFlags::empty(), &[barrier], &[], &[])
-        };
-    }
-
     /// Uploads RGBA f32 pixels into an `R32G32B32A32_SFLOAT` image (usage `TRANSFER_DST`) and
     /// leaves it in `GENERAL` layout, ready for a compute pass.
     pub fn upload_rgba32f(&self, image: &Image, pixels: &[[f32; 4]]) -> Result<()> {
