@@ -311,46 +311,42 @@ impl GpuFrame {
         let Some(outputs) = self.network.outputs() else {
             anyhow::bail!("this frame writes only its display image (FrameOutput::Display); it has no radiance to read")
         };
-        let images = [&outputs.direct, &outputs.indirect, &outputs.gi];
-        let mut buffers = Vec::new();
-        let read = (|| {
-            for image in images {
-                buffers.push(ctx.create_readback_buffer(image)?);
-            }
-            ctx.submit_once(|cmd| {
-                let extra = images.iter().zip(&buffers).flat_map(|(i, b)| read_back_passes(ctx, i, b)).collect();
-                self.record(ctx, cmd, settings, None, None, extra)
-            })??;
-            let decode = |i: usize| ctx.decode(images[i].format, &buffers[i]);
-            Ok(FramePixels { direct: decode(0)?, indirect: decode(1)?, gi: decode(2)? })
-        })();
-        for buffer in buffers {
-            ctx.destroy_buffer(buffer);
-        }
-        read
+        let [direct, indirect, gi] = self
+            .read_back(ctx, &[&outputs.direct, &outputs.indirect, &outputs.gi], Some(settings))?
+            .try_into()
+            .map_err(|_| anyhow::anyhow!("three images read back"))?;
+        Ok(FramePixels { direct, indirect, gi })
     }
 
     /// Renders one frame and reads the display image back: RGBA in [0, 1], sRGB-encoded.
     pub fn render_display(&self, ctx: &Context, settings: &FrameSettings) -> Result<Vec<f32>> {
-        let buffer = ctx.guard(ctx.create_readback_buffer(&self.ldr)?);
-        ctx.submit_once(|cmd| {
-            let extra = read_back_passes(ctx, &self.ldr, &buffer).into();
-            self.record(ctx, cmd, settings, None, None, extra)
-        })??;
-        Ok(ctx.decode(self.ldr.format, &buffer)?)
+        Ok(self.read_back(ctx, &[&self.ldr], Some(settings))?.remove(0))
     }
 
     /// Object ids + 1 of the last frame's pixels (0: nothing).
     pub fn read_objects(&self, ctx: &Context) -> Result<Vec<u32>> {
-        let image = &self.targets.id;
-        let buffer = ctx.create_readback_buffer(image)?;
-        let read = ctx
-            .submit_once(|cmd| {
-                run_passes(ctx, cmd, &mut self.states.borrow_mut(), read_back_passes(ctx, image, &buffer).into())
-            })
-            .and_then(|()| ctx.decode(image.format, &buffer));
-        ctx.destroy_buffer(buffer);
-        Ok(read?.iter().map(|&v| GBufferTexel::decode([0; 4], v.to_bits()).object).collect())
+        let ids = self.read_back(ctx, &[&self.targets.id], None)?.remove(0);
+        Ok(ids.iter().map(|&v| GBufferTexel::decode([0; 4], v.to_bits()).object).collect())
+    }
+
+    /// Reads `images` back (as `Context::decode` gives them), after rendering a frame of
+    /// `settings` first, or else as the last frame left them; waits for the GPU.
+    fn read_back(&self, ctx: &Context, images: &[&Image], settings: Option<&FrameSettings>) -> Result<Vec<Vec<f32>>> {
+        let mut buffers = ctx.guard(Vec::with_capacity(images.len()));
+        for image in images {
+            buffers.push(ctx.create_readback_buffer(image)?);
+        }
+        ctx.submit_once(|cmd| {
+            let passes = images.iter().zip(buffers.iter()).flat_map(|(i, b)| read_back_passes(ctx, i, b)).collect();
+            match settings {
+                Some(settings) => self.record(ctx, cmd, settings, None, None, passes),
+                None => {
+                    run_passes(ctx, cmd, &mut self.states.borrow_mut(), passes);
+                    Ok(())
+                }
+            }
+        })??;
+        images.iter().zip(buffers.iter()).map(|(i, b)| Ok(ctx.decode(i.format, b)?)).collect()
     }
 
     pub fn destroy(self, ctx: &Context) {
