@@ -6,6 +6,7 @@
 
 pub mod commands;
 pub mod eval;
+pub mod frame_stats;
 pub mod gpu_frame;
 pub mod gpu_scene;
 pub mod image_out;

@@ -14,10 +14,11 @@ use serde_json::json;
 
 use super::bake::default_model_path;
 use super::variant::VariantArg;
+use crate::frame_stats::{median, Stats};
 use crate::gpu_frame::{FrameOutput, FrameSettings, GpuFrame, Shown, TIMESTAMPS};
 
 /// Frames run before timing starts.
-const WARM_UP: u32 = 2;
+const WARM_UP: usize = 2;
 
 /// Multiply-adds of one 13 → 20 → 10 → 3 network: 13·20 + 20·10 + 10·3.
 const MULTIPLY_ADDS: f64 = 490.0;
@@ -86,11 +87,6 @@ pub struct BenchArgs {
     pub json: bool,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 pub fn run(args: &BenchArgs) -> Result<()> {
     let (width, height) = super::view_args::parse_size(&args.size)?;
     if args.frames == 0 {
@@ -153,10 +149,10 @@ impl Bench<'_> {
         let timed = self.time_frames(&frame, &settings);
         let objects = timed.as_ref().ok().map(|_| frame.read_objects(ctx));
         frame.destroy(ctx);
-        let (passes, cpu) = timed?;
+        let stats = timed?;
         let bytes_per_pixel = bytes_per_pixel?;
         let objects = objects.expect("read after timing")?;
-        let [gbuffer, network, tonemap, _rest] = passes;
+        let [gbuffer, network, tonemap, _rest] = &stats.gpu_ms;
         // Networks evaluated per frame: two per pixel of an object that has them.
         let trained: Vec<bool> =
             scene.objects.iter().map(|o| model.network(&o.name, Component::Direct).is_some()).collect();
@@ -179,7 +175,7 @@ impl Bench<'_> {
             "gbuffer_ms": median(gbuffer),
             "network_ms": network_ms,
             "tonemap_ms": median(tonemap),
-            "frame_ms": median(cpu),
+            "frame_ms": median(&stats.frame_ms),
             "bytes_per_pixel": bytes_per_pixel,
             "networks_per_frame": evaluations,
             "network_pixels_per_s": per_s,
@@ -190,37 +186,32 @@ impl Bench<'_> {
 }
 
 impl Bench<'_> {
-    /// Runs warm-up and timed frames with [`FRAMES_IN_FLIGHT`] in flight. Returns the GPU
-    /// milliseconds of each timed interval (`gpu_frame::TIMED_PASSES`) and the CPU milliseconds from
-    /// one frame's start to the next's, per timed frame.
-    fn time_frames(&self, frame: &GpuFrame, settings: &FrameSettings) -> Result<([Vec<f64>; 4], Vec<f64>)> {
+    /// Runs warm-up and timed frames with [`FRAMES_IN_FLIGHT`] in flight. Returns, per timed
+    /// frame, the GPU milliseconds of each timed interval (`gpu_frame::TIMED_PASSES`) and the
+    /// CPU milliseconds from the frame's start to the next's.
+    fn time_frames(&self, frame: &GpuFrame, settings: &FrameSettings) -> Result<Stats> {
         let ctx = self.ctx;
+        let frames = self.args.frames as usize;
         let mut ring = FrameLoop::new(ctx, TIMESTAMPS)?;
         let timed = (|| -> Result<_> {
-            let mut passes: [Vec<f64>; 4] = Default::default();
-            let mut cpu = Vec::new();
-            let mut last_start: Option<Instant> = None;
+            let mut stats = Stats::default();
             // The last FRAMES_IN_FLIGHT frames only deliver the timestamps of the ones before.
-            for i in 0..WARM_UP + self.args.frames + FRAMES_IN_FLIGHT as u32 {
+            for i in 0..WARM_UP + frames + FRAMES_IN_FLIGHT {
                 let (handles, stamps) = ring.begin(ctx)?;
-                let now = Instant::now();
-                if let Some(last) = last_start.replace(now) {
-                    if (WARM_UP + 1..=WARM_UP + self.args.frames).contains(&i) {
-                        cpu.push((now - last).as_secs_f64() * 1e3);
-                    }
-                }
-                let stamped_frame = i.checked_sub(FRAMES_IN_FLIGHT as u32);
+                stats.frame_started();
+                let stamped_frame = i.checked_sub(FRAMES_IN_FLIGHT);
                 if let (Some(stamps), Some(f)) = (stamps, stamped_frame) {
                     if f >= WARM_UP {
-                        for (k, times) in passes.iter_mut().enumerate() {
-                            times.push(stamps[k + 1].wrapping_sub(stamps[k]) as f64 * self.period_ns * 1e-6);
-                        }
+                        stats.add_timestamps(&stamps, self.period_ns);
                     }
                 }
                 frame.record(ctx, handles.cmd, settings, None, Some(handles.queries), vec![])?;
                 ring.submit(ctx, None, None, true)?;
             }
-            Ok((passes, cpu))
+            // Interval k runs from frame k to frame k + 1: keep those of the timed frames.
+            stats.frame_ms.truncate(WARM_UP + frames);
+            stats.frame_ms.drain(..WARM_UP);
+            Ok(stats)
         })();
         ring.destroy(ctx);
         timed

@@ -4,7 +4,6 @@
 pub mod renderer;
 pub mod script;
 pub mod state;
-pub mod stats;
 pub mod window;
 
 use std::collections::HashSet;
@@ -13,10 +12,10 @@ use std::time::Instant;
 
 use anyhow::Result;
 
+use crate::frame_stats::Stats;
 use renderer::{Presenter, Renderer};
 use script::{Action, Script, FRAME_SECONDS};
 use state::{Held, ViewerState};
-use stats::Stats;
 
 /// How a run ends and what it saves.
 #[derive(Clone, Debug, Default)]

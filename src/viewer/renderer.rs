@@ -16,7 +16,7 @@ use rrf_renderer::sync::{Access, Pass, Resource, Use};
 use rrf_renderer::{vk, Context, Image};
 
 use super::state::ViewerState;
-use super::stats::Stats;
+use crate::frame_stats::Stats;
 use crate::gpu_frame::{FrameOutput, GpuFrame, TIMESTAMPS};
 use crate::image_out::write_atomically;
 

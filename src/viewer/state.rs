@@ -6,7 +6,7 @@ use rrf_baker::scene::{Aabb, Scene, View};
 use rrf_renderer::overlay::{Colour, TextGrid};
 
 use super::script::Action;
-use super::stats::Stats;
+use crate::frame_stats::Stats;
 use crate::gpu_frame::{FrameSettings, Shown, TIMED_PASSES};
 
 /// Keys that act for as long as they are held.

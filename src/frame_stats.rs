@@ -1,4 +1,5 @@
-//! Frame statistics: CPU frame times, GPU milliseconds per pass, the process's memory.
+//! Frame statistics, for `rrf view --stats` and its overlay and for `rrf bench`: CPU frame
+//! times, GPU milliseconds per pass from timestamp queries, the process's memory.
 
 use std::time::Instant;
 
@@ -18,8 +19,14 @@ pub struct Stats {
     last_start: Option<Instant>,
 }
 
-fn median(values: &[f64]) -> f64 {
-    percentile(values, 0.5)
+/// The middle value (the upper of the two middle ones for an even count); 0 for none.
+pub fn median(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
 }
 
 /// The value below which `q` of `values` lie (nearest rank); 0 for none.
