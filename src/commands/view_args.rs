@@ -66,11 +66,14 @@ pub fn named_view(scene: &Scene, name: Option<&str>) -> Result<View> {
     })
 }
 
-/// Stops of exposure: a finite number between -20 and 20.
+/// The most exposure, in stops either way, that rrf accepts.
+pub const MAX_EXPOSURE: f32 = 20.0;
+
+/// Stops of exposure: a finite number within ±[`MAX_EXPOSURE`].
 pub fn parse_exposure(text: &str) -> Result<f32, String> {
     match text.trim().parse::<f32>() {
-        Ok(v) if v.is_finite() && v.abs() <= 20.0 => Ok(v),
-        _ => Err(format!("{text:?} is not a number of stops between -20 and 20")),
+        Ok(v) if v.is_finite() && v.abs() <= MAX_EXPOSURE => Ok(v),
+        _ => Err(format!("{text:?} is not a number of stops between -{MAX_EXPOSURE} and {MAX_EXPOSURE}")),
     }
 }
 

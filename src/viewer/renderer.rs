@@ -98,12 +98,9 @@ impl Renderer {
         let wanted = vk::Extent2D { width: size.0, height: size.1 };
         let fits = presenter.swapchain.as_ref().is_some_and(|s| s.extent == wanted) && !presenter.stale;
         if !fits {
-            let (ctx, _, ring) = self.parts();
-            // Presentation may still wait on the old swapchain's semaphores: let the queue
-            // drain before the old swapchain goes.
-            ring.wait_all(ctx)?;
-            // SAFETY: waiting on the context's own queue, used from this thread only.
-            unsafe { ctx.device.queue_wait_idle(ctx.queue) }.context("vkQueueWaitIdle")?;
+            // Presentation may still wait on the old swapchain's semaphores.
+            self.wait_for_presentation()?;
+            let ctx = &self.ctx;
             let surface = presenter.surface.as_ref().expect("live until destroy");
             let old = presenter.swapchain.take();
             let new = Swapchain::new(ctx, surface, wanted, presenter.present_mode, old.as_ref());
@@ -189,14 +186,14 @@ impl Renderer {
         if let Some(buffer) = readback {
             let extent = ldr.extent;
             ring.defer(Box::new(move |ctx: &Context| {
-                match ctx.decode(vk::Format::R8G8B8A8_UNORM, &buffer) {
-                    Ok(rgba) => {
+                match buffer.mapped() {
+                    Some(rgba) => {
                         for path in screenshots {
-                            let result = save_png(&path, extent, &rgba).map(|()| path);
+                            let result = save_png(&path, extent, rgba).map(|()| path);
                             saved.borrow_mut().push(result);
                         }
                     }
-                    Err(e) => saved.borrow_mut().push(Err(e.into())),
+                    None => saved.borrow_mut().push(Err(anyhow::anyhow!("the screenshot buffer is not host-visible"))),
                 }
                 ctx.destroy_buffer(buffer);
             }));
@@ -212,13 +209,17 @@ impl Renderer {
     /// Waits for every frame and for presentation, then destroys the presenter's swapchain
     /// and surface.
     pub fn retire(&mut self, presenter: Presenter) -> Result<()> {
+        let waited = self.wait_for_presentation();
+        presenter.destroy(&self.ctx);
+        waited
+    }
+
+    /// Waits for every frame in flight and for the queue, presentations included.
+    fn wait_for_presentation(&mut self) -> Result<()> {
         let (ctx, _, ring) = self.parts();
-        let waited = ring.wait_all(ctx);
+        ring.wait_all(ctx)?;
         // SAFETY: waiting on the context's own queue, used from this thread only.
-        let idle = unsafe { ctx.device.queue_wait_idle(ctx.queue) }.context("vkQueueWaitIdle");
-        presenter.destroy(ctx);
-        waited?;
-        idle
+        unsafe { ctx.device.queue_wait_idle(ctx.queue) }.context("vkQueueWaitIdle")
     }
 
     /// Waits for every frame, writes pending screenshots, and tears everything down. Returns
@@ -279,11 +280,10 @@ fn present_passes<'a>(ctx: &'a Context, ldr: &'a Image, image: vk::Image, extent
     [blit, present]
 }
 
-/// Writes RGBA floats in [0, 1] (as read back from an RGBA8 image) as an RGB PNG, through a
+/// Writes the RGBA8 pixels read back from the display image as an RGB PNG, through a
 /// temporary file so that a failed write leaves no half-written image.
-pub fn save_png(path: &std::path::Path, extent: vk::Extent2D, rgba: &[f32]) -> Result<()> {
-    let rgb: Vec<u8> =
-        rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).map(|c| (c * 255.0).round() as u8).collect();
+pub fn save_png(path: &std::path::Path, extent: vk::Extent2D, rgba: &[u8]) -> Result<()> {
+    let rgb: Vec<u8> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
     let image = image::RgbImage::from_raw(extent.width, extent.height, rgb).context("screenshot size mismatch")?;
     write_atomically(path, |tmp| {
         image

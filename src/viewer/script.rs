@@ -17,10 +17,10 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use rrf_baker::glam::Vec3;
 
-use crate::commands::view_args::{parse_size, parse_vec3};
+use crate::commands::view_args::{parse_exposure, parse_size, parse_vec3};
 use crate::gpu_frame::Shown;
 
 /// Script time per frame.
@@ -121,10 +121,7 @@ fn parse_line(line: &str) -> Result<Event> {
             "indirect" => Shown::Indirect,
             _ => bail!("component {name:?}: expected gi, direct or indirect"),
         }),
-        ("exposure", [ev]) => match ev.parse::<f32>() {
-            Ok(v) if v.is_finite() && v.abs() <= 20.0 => Action::Exposure(v),
-            _ => bail!("exposure {ev:?}: expected stops between -20 and 20"),
-        },
+        ("exposure", [ev]) => Action::Exposure(parse_exposure(ev).map_err(|e| anyhow!("exposure {e}"))?),
         ("resize", [size]) => {
             let (w, h) = parse_size(size)?;
             Action::Resize(w, h)

@@ -6,6 +6,7 @@ use rrf_baker::scene::{Aabb, Scene, View};
 use rrf_renderer::overlay::{Colour, TextGrid};
 
 use super::script::Action;
+use crate::commands::view_args::MAX_EXPOSURE;
 use crate::frame_stats::Stats;
 use crate::gpu_frame::{FrameSettings, Shown, TIMED_PASSES};
 
@@ -153,7 +154,7 @@ impl ViewerState {
     }
 
     pub fn exposure_step(&mut self, stops: f32) {
-        self.exposure = (self.exposure + stops).clamp(-20.0, 20.0);
+        self.exposure = (self.exposure + stops).clamp(-MAX_EXPOSURE, MAX_EXPOSURE);
     }
 
     /// Advances held keys and running moves by `dt` seconds, at script time `t`.
