@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
 use rrf_baker::bake::{bake, BakeProgress, BakeSettings, Quality};
+use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
 use serde_json::json;
 
@@ -60,6 +61,17 @@ impl BakeProgress for Bars {
 
 pub fn default_model_path(scene: &Scene) -> PathBuf {
     scene.gltf_path.parent().unwrap_or(Path::new(".")).join("model.safetensors")
+}
+
+/// The model to render `scene` with (`path`, or the scene's own), checked against the scene,
+/// with a warning for each object it has no network for.
+pub fn model_to_render(scene: &Scene, path: Option<&Path>) -> Result<Model> {
+    let path = path.map_or_else(|| default_model_path(scene), Path::to_path_buf);
+    let model = Model::load(&path, Some(scene))?;
+    for u in &model.metadata.untrained {
+        eprintln!("warning: {} has no network ({}); it renders black", u.object, u.reason);
+    }
+    Ok(model)
 }
 
 pub fn run(args: &BakeArgs) -> Result<()> {

@@ -12,7 +12,7 @@ use rrf_baker::scene::{Scene, View};
 use rrf_baker::trace::{Camera, Geometry, World};
 use rrf_renderer::{vk, Context, ContextOptions};
 
-use super::bake::default_model_path;
+use super::bake::model_to_render;
 use super::variant::VariantArg;
 use super::view_args::{Component, ViewArgs};
 use crate::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
@@ -44,11 +44,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let (width, height) = args.view.size()?;
     check_output(&args.output)?;
     let scene = Scene::load(&args.view.scene)?;
-    let model_path = args.model.clone().unwrap_or_else(|| default_model_path(&scene));
-    let model = Model::load(&model_path, Some(&scene))?;
-    for u in &model.metadata.untrained {
-        eprintln!("warning: {} has no network ({}); it renders black", u.object, u.reason);
-    }
+    let model = model_to_render(&scene, args.model.as_deref())?;
     let view = args.view.resolve_view(&scene)?;
     let light = args.view.light_position(&scene)?;
     let start = Instant::now();

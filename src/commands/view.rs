@@ -4,11 +4,10 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, ValueEnum};
-use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
 use rrf_renderer::{swapchain, vk, Context, ContextOptions};
 
-use super::bake::default_model_path;
+use super::bake::model_to_render;
 use super::variant::VariantArg;
 use super::view_args::{named_view, parse_size, parse_vec3};
 use crate::viewer::renderer::Renderer;
@@ -117,11 +116,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         }
     }
     let scene = Scene::load(&args.scene)?;
-    let model_path = args.model.clone().unwrap_or_else(|| default_model_path(&scene));
-    let model = Model::load(&model_path, Some(&scene))?;
-    for u in &model.metadata.untrained {
-        eprintln!("warning: {} has no network ({}); it renders black", u.object, u.reason);
-    }
+    let model = model_to_render(&scene, args.model.as_deref())?;
     let view = named_view(&scene, args.view.as_deref())?;
     let default_light = scene.moving_light.as_ref().map_or(Default::default(), |l| l.default_position);
     let light = match &args.light {
