@@ -2,6 +2,7 @@
 //! No Vulkan here.
 
 pub mod bake;
+pub mod fuzzing;
 pub mod hash;
 pub mod model;
 pub mod network;

@@ -378,3 +378,272 @@ fn default_light_outside_its_box() {
     let message = load_err(&dir);
     assert!(message.contains("outside the box"), "{message}");
 }
+
+// Hostile input: each of these panicked, or was accepted and gave black or non-finite pixels,
+// before the importer checked it.
+
+/// `tiny_gltf` with one more accessor (and its own buffer view) appended to the buffer.
+fn with_accessor(gltf: &mut Value, bin: &mut Vec<u8>, data: &[u8], accessor: Value) -> usize {
+    let offset = bin.len();
+    bin.extend(data);
+    let views = gltf["bufferViews"].as_array_mut().unwrap();
+    views.push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": data.len() }));
+    let view = views.len() - 1;
+    let mut accessor = accessor;
+    accessor["bufferView"] = json!(view);
+    gltf["accessors"].as_array_mut().unwrap().push(accessor);
+    gltf["buffers"][0]["byteLength"] = json!(bin.len());
+    gltf["accessors"].as_array().unwrap().len() - 1
+}
+
+fn f32_bytes(values: &[f32]) -> Vec<u8> {
+    values.iter().flat_map(|v| v.to_le_bytes()).collect()
+}
+
+#[test]
+fn normals_shorter_than_positions() {
+    let dir = scratch("short-normals");
+    let (mut gltf, mut bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    let normals = f32_bytes(&[0.0, 0.0, 1.0, 0.0, 0.0, 1.0]);
+    let a = with_accessor(&mut gltf, &mut bin, &normals, json!({ "componentType": 5126, "count": 2, "type": "VEC3" }));
+    gltf["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = json!(a);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("NORMAL") && message.contains("2") && message.contains("POSITION"), "{message}");
+}
+
+#[test]
+fn texture_coordinates_shorter_than_positions() {
+    let dir = scratch("short-uvs");
+    let (mut gltf, mut bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    let a = with_accessor(
+        &mut gltf,
+        &mut bin,
+        &f32_bytes(&[0.0; 2]),
+        json!({ "componentType": 5126, "count": 1, "type": "VEC2" }),
+    );
+    gltf["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(a);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("TEXCOORD_0") && message.contains("POSITION"), "{message}");
+}
+
+#[test]
+fn float_indices_are_refused() {
+    let dir = scratch("float-indices");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["accessors"][1]["componentType"] = json!(5126);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("accessors[1]") && message.contains("indices"), "{message}");
+}
+
+#[test]
+fn signed_texture_coordinates_are_refused() {
+    let dir = scratch("signed-uvs");
+    let (mut gltf, mut bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    let a =
+        with_accessor(&mut gltf, &mut bin, &[0u8; 12], json!({ "componentType": 5122, "count": 3, "type": "VEC2" }));
+    gltf["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = json!(a);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains(&format!("accessors[{a}]")) && message.contains("TEXCOORD_0"), "{message}");
+}
+
+#[test]
+fn stride_smaller_than_the_element() {
+    let dir = scratch("small-stride");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["bufferViews"][0]["byteStride"] = json!(4);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("accessors[0]") && message.contains("stride"), "{message}");
+}
+
+#[test]
+fn huge_node_scale() {
+    let dir = scratch("huge-scale");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["nodes"][0]["scale"] = json!([1e20, 1e20, 1e20]);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("meshes[0] primitives[0]") && message.contains("from the origin"), "{message}");
+}
+
+#[test]
+fn scene_without_triangles() {
+    let dir = scratch("no-triangles");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["meshes"][0]["primitives"][0]["mode"] = json!(0);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("scene.gltf") && message.contains("no triangles"), "{message}");
+}
+
+fn with_camera(gltf: &mut Value, camera: Value, node: Value) {
+    gltf["cameras"] = json!([camera]);
+    gltf["nodes"].as_array_mut().unwrap().push(node);
+    let index = gltf["nodes"].as_array().unwrap().len() - 1;
+    gltf["scenes"][0]["nodes"].as_array_mut().unwrap().push(json!(index));
+}
+
+#[test]
+fn camera_without_a_field_of_view() {
+    for (test, yfov) in [("zero-fov", 0.0), ("negative-fov", -0.5), ("wide-fov", 3.5)] {
+        let dir = scratch(test);
+        let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+        with_camera(
+            &mut gltf,
+            json!({ "type": "perspective", "perspective": { "yfov": yfov, "znear": 0.01 } }),
+            json!({ "name": "Cam", "camera": 0 }),
+        );
+        let message = load_err(&write_scene(&dir, &gltf, &bin));
+        assert!(message.contains("nodes[1] \"Cam\"") && message.contains("field of view"), "{test}: {message}");
+    }
+}
+
+#[test]
+fn camera_with_zero_scale() {
+    let dir = scratch("zero-scale-camera");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    with_camera(
+        &mut gltf,
+        json!({ "type": "perspective", "perspective": { "yfov": 0.7, "znear": 0.01 } }),
+        json!({ "name": "Cam", "camera": 0, "scale": [0.0, 0.0, 0.0] }),
+    );
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("nodes[1] \"Cam\"") && message.contains("direction"), "{message}");
+}
+
+fn with_material(gltf: &mut Value, material: Value) {
+    gltf["materials"] = json!([material]);
+    gltf["meshes"][0]["primitives"][0]["material"] = json!(0);
+}
+
+#[test]
+fn material_values_out_of_range() {
+    let cases = [
+        (
+            "negative-base",
+            json!({ "name": "M", "pbrMetallicRoughness": { "baseColorFactor": [-1.0, 0.5, 0.5, 1.0] } }),
+            "baseColorFactor",
+        ),
+        (
+            "huge-emission",
+            json!({ "name": "M", "emissiveFactor": [1.0, 1.0, 1.0],
+            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 1e39 } } }),
+            "emissi",
+        ),
+        ("negative-emission", json!({ "name": "M", "emissiveFactor": [1.0, -1.0, 1.0] }), "emissiveFactor"),
+    ];
+    for (test, material, key) in cases {
+        let dir = scratch(test);
+        let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+        with_material(&mut gltf, material);
+        if test == "huge-emission" {
+            gltf["extensionsUsed"] = json!(["KHR_materials_emissive_strength"]);
+        }
+        let message = load_err(&write_scene(&dir, &gltf, &bin));
+        assert!(message.contains("materials[0] \"M\"") && message.contains(key), "{test}: {message}");
+    }
+}
+
+#[test]
+fn buffer_outside_the_scene_folder() {
+    for (test, uri) in
+        [("parent-uri", "../secret.bin"), ("absolute-uri", "/etc/passwd"), ("file-uri", "file:///etc/passwd")]
+    {
+        let dir = scratch(test);
+        let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+        std::fs::write(dir.parent().unwrap().join("secret.bin"), &bin).unwrap();
+        gltf["buffers"][0]["uri"] = json!(uri);
+        let message = load_err(&write_scene(&dir, &gltf, &bin));
+        assert!(message.contains("buffers[0]") && message.contains("scene folder"), "{test}: {message}");
+    }
+}
+
+#[test]
+fn malformed_percent_encoding() {
+    let dir = scratch("percent");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["buffers"][0]["uri"] = json!("scene%FF.bin");
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("buffers[0]") && message.contains("%FF"), "{message}");
+}
+
+fn with_texture(gltf: &mut Value, image: Value) {
+    gltf["images"] = json!([image]);
+    gltf["textures"] = json!([{ "source": 0 }]);
+    with_material(gltf, json!({ "name": "M", "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 } } }));
+}
+
+#[test]
+fn missing_texture_is_named() {
+    let dir = scratch("missing-texture");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    with_texture(&mut gltf, json!({ "name": "Bricks", "uri": "bricks.png" }));
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("images[0] \"Bricks\"") && message.contains("bricks.png"), "{message}");
+}
+
+#[test]
+fn undecodable_texture_is_named() {
+    let dir = scratch("broken-texture");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    std::fs::write(dir.join("bricks.png"), b"\x89PNG\r\n\x1a\nnot really").unwrap();
+    with_texture(&mut gltf, json!({ "uri": "bricks.png" }));
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("images[0]") && message.contains("bricks.png"), "{message}");
+}
+
+#[test]
+fn texture_view_past_its_buffer() {
+    let dir = scratch("texture-view");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["bufferViews"].as_array_mut().unwrap().push(json!({ "buffer": 0, "byteOffset": 8, "byteLength": 4000 }));
+    with_texture(&mut gltf, json!({ "bufferView": 2, "mimeType": "image/png" }));
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("images[0]") && message.contains("bufferViews[2]"), "{message}");
+}
+
+#[test]
+fn light_with_no_area() {
+    let dir = scratch("flat-light");
+    // Three collinear vertices: a triangle of zero area.
+    let (mut gltf, bin) = tiny_gltf(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]], &[0, 1, 2]);
+    with_material(&mut gltf, json!({ "name": "Glow", "emissiveFactor": [1.0, 1.0, 1.0] }));
+    std::fs::write(dir.join("scene.toml"), "[light]\nnode = \"Tri\"\nmin = [-1, -1, -1]\nmax = [1, 1, 1]\n").unwrap();
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("light.node") && message.contains("no area"), "{message}");
+}
+
+#[test]
+fn point_light_that_emits_nothing() {
+    let dir = scratch("dark-light");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    gltf["extensions"] = json!({ "KHR_lights_punctual": { "lights": [{ "type": "point", "intensity": 0.0 }] } });
+    gltf["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "name": "Bulb", "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
+    gltf["scenes"][0]["nodes"] = json!([0, 1]);
+    std::fs::write(dir.join("scene.toml"), "[light]\nnode = \"Bulb\"\nmin = [-1, -1, -1]\nmax = [1, 1, 1]\n").unwrap();
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("light.node") && message.contains("emits nothing"), "{message}");
+}
+
+#[test]
+fn sidecar_bake_overrides_out_of_range() {
+    for (test, value) in [("zero-configs", "0"), ("huge-configs", "4000000000")] {
+        let dir = cornell_with_sidecar(test, &format!("[bake.final]\nconfigurations = {value}\n"));
+        let message = load_err(&dir);
+        assert!(message.contains("scene.toml") && message.contains("bake.final.configurations"), "{test}: {message}");
+    }
+    let dir = cornell_with_sidecar("zero-paths", "[bake.test]\npaths_per_sample = 0\n");
+    let message = load_err(&dir);
+    assert!(message.contains("bake.test.paths_per_sample"), "{message}");
+}
+
+#[test]
+fn sidecar_box_far_from_the_origin() {
+    let dir = cornell_with_sidecar("huge-box", "[camera]\nmin = [-1e38, 0, 0]\nmax = [1e38, 1, 1]\n");
+    let message = load_err(&dir);
+    assert!(
+        message.contains("scene.toml") && message.contains("camera") && message.contains("from the origin"),
+        "{message}"
+    );
+}

@@ -13,19 +13,29 @@ use gltf::buffer::Data as BufferData;
 use gltf::mesh::Mode;
 
 use super::error::SceneError;
+use super::external;
 use super::sidecar::{Aabb, Sidecar};
 use super::texture::{ColorSpace, Texture};
-use super::{LightKind, Material, MovingLight, Object, Part, PointLight, Scene, View};
+use super::{LightKind, Material, MovingLight, Object, Part, PointLight, Scene, View, MAX_COORDINATE};
 use crate::hash::Fnv64;
+
+/// Largest `KHR_materials_emissive_strength`: far above the sun's disc, far below where
+/// sums of radiance overflow f32.
+const MAX_EMISSIVE_STRENGTH: f32 = 1e9;
 
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] =
     &["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular"];
 
-pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> Result<Scene, SceneError> {
+/// Imports the glTF or GLB `bytes` of `file`; external files resolve against `file`'s folder.
+pub(super) fn import(
+    file: &Path,
+    bytes: &[u8],
+    sidecar_path: Option<&Path>,
+    name: String,
+) -> Result<Scene, SceneError> {
     let err = |element: &str, problem: String| SceneError::new(file, element, problem);
-    let bytes = std::fs::read(file).map_err(|e| err("", format!("cannot read: {e}")))?;
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes)
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| err("", format!("not a valid glTF or GLB file: {e}")))?;
     for (i, ext) in document.extensions_required().enumerate() {
         if !SUPPORTED_EXTENSIONS.contains(&ext) {
@@ -44,9 +54,8 @@ pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> 
     })?;
 
     let base = file.parent().unwrap_or(Path::new("."));
-    check_buffer_files(file, &document, base)?;
-    let buffers = gltf::import_buffers(&document, Some(base), blob).map_err(|e| err("buffers", e.to_string()))?;
-    let images = gltf::import_images(&document, Some(base), &buffers).map_err(|e| err("images", e.to_string()))?;
+    let buffers = external::load_buffers(file, &document, base, blob)?;
+    let images = external::load_images(file, &document, base, &buffers)?;
 
     let sidecar_text = match sidecar_path {
         Some(p) => Some(std::fs::read_to_string(p).map_err(|e| SceneError::new(p, "", format!("cannot read: {e}")))?),
@@ -58,7 +67,7 @@ pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> 
     };
 
     let mut hash = Fnv64::default();
-    hash.write(&bytes);
+    hash.write(bytes);
     buffers.iter().for_each(|b| hash.write(&b.0));
     images.iter().for_each(|i| hash.write(&i.pixels));
     hash.write(sidecar_text.as_deref().unwrap_or_default().as_bytes());
@@ -71,7 +80,7 @@ pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> 
         textures: Vec::new(),
         texture_ids: HashMap::new(),
     };
-    let mut materials: Vec<Material> = document.materials().map(|m| importer.material(&m)).collect();
+    let mut materials: Vec<Material> = document.materials().map(|m| importer.material(&m)).collect::<Result<_, _>>()?;
     let default_material = materials.len() as u32;
     let uses_default = document.meshes().flat_map(|m| m.primitives()).any(|p| p.material().index().is_none());
     // glTF's default material, for primitives without one: white, fully metallic, fully rough.
@@ -137,26 +146,28 @@ pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> 
         }
         if let Some(light) = node.light() {
             match light.kind() {
-                gltf::khr_lights_punctual::Kind::Point => point_lights.push(PointLight {
-                    name: node_name.clone(),
-                    node: node.index(),
-                    position: world.transform_point3(Vec3::ZERO),
-                    intensity: Vec3::from(light.color()) * light.intensity(),
-                }),
+                gltf::khr_lights_punctual::Kind::Point => {
+                    let intensity = Vec3::from(light.color()) * light.intensity();
+                    if !(intensity.is_finite() && intensity.min_element() >= 0.0) {
+                        return Err(err(
+                            &element,
+                            format!("point light intensity {intensity} must be finite and not negative"),
+                        ));
+                    }
+                    point_lights.push(PointLight {
+                        name: node_name.clone(),
+                        node: node.index(),
+                        position: world.transform_point3(Vec3::ZERO),
+                        intensity,
+                    })
+                }
                 _ => importer.warnings.push(format!("{element}: only point lights are supported; light skipped")),
             }
         }
         if let Some(camera) = node.camera() {
             match camera.projection() {
                 gltf::camera::Projection::Perspective(p) if views.is_empty() => {
-                    let eye = world.transform_point3(Vec3::ZERO);
-                    views.push(View {
-                        name: "default".into(),
-                        eye,
-                        target: eye + world.transform_vector3(Vec3::NEG_Z).normalize(),
-                        up: world.transform_vector3(Vec3::Y).normalize(),
-                        fov_y: p.yfov().to_degrees(),
-                    });
+                    views.push(camera_view(&world, p.yfov()).map_err(|problem| err(&element, problem))?);
                 }
                 gltf::camera::Projection::Perspective(_) => {
                     importer.warnings.push(format!("{element}: only the first camera is used"))
@@ -167,6 +178,12 @@ pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> 
             }
         }
         stack.extend(node.children().map(|c| (c, world)).collect::<Vec<_>>().into_iter().rev());
+    }
+    if objects.iter().all(|o| o.triangles.is_empty()) {
+        return Err(err(
+            "",
+            "has no triangles to render (only meshes of TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN are drawn)".into(),
+        ));
     }
     if skipped_primitives > 0 {
         importer
@@ -191,18 +208,19 @@ pub(super) fn import(file: &Path, sidecar_path: Option<&Path>, name: String) -> 
         None => None,
         Some(domain) => {
             let bounds = Aabb { min: domain.min.into(), max: domain.max.into() };
+            let dark =
+                |what: &str| Err(SceneError::new(sidecar_file, "light.node", format!("node {:?} {what}", domain.node)));
             let (kind, default_position) = if let Some(i) = point_lights.iter().position(|l| l.name == domain.node) {
+                if point_lights[i].intensity.max_element() <= 0.0 {
+                    return dark("emits nothing: its point light has zero intensity");
+                }
                 (LightKind::Point(i), point_lights[i].position)
             } else if let Some(o) = objects.iter().find(|o| o.name == domain.node) {
                 if !o.parts.iter().any(|p| materials[p.material as usize].is_emissive()) {
-                    return Err(SceneError::new(
-                        sidecar_file,
-                        "light.node",
-                        format!(
-                            "node {:?} is not a light: it has no emissive material and no point light",
-                            domain.node
-                        ),
-                    ));
+                    return dark("is not a light: it has no emissive material and no point light");
+                }
+                if emitting_area(o, &materials) <= 0.0 {
+                    return dark("is an emitter with no area: its emissive triangles are degenerate");
                 }
                 (LightKind::Area(o.id), node_positions[&o.node])
             } else {
@@ -257,20 +275,33 @@ fn node_element(node: &gltf::Node) -> String {
     }
 }
 
-/// Names the buffer whose external file is missing, which the `gltf` crate does not.
-fn check_buffer_files(file: &Path, document: &gltf::Document, base: &Path) -> Result<(), SceneError> {
-    for buffer in document.buffers() {
-        if let gltf::buffer::Source::Uri(uri) = buffer.source() {
-            if !uri.starts_with("data:") && !base.join(uri).is_file() {
-                return Err(SceneError::new(
-                    file,
-                    format!("buffers[{}]", buffer.index()),
-                    format!("file {uri:?} not found beside the glTF"),
-                ));
-            }
-        }
+/// The default view from a perspective camera's world transform; the camera looks down its
+/// local -z with +y up.
+fn camera_view(world: &Mat4, yfov: f32) -> Result<View, String> {
+    if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
+        return Err(format!("camera field of view {yfov} rad must lie between 0 and π"));
     }
-    Ok(())
+    let eye = world.transform_point3(Vec3::ZERO);
+    let forward = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    let up = world.transform_vector3(Vec3::Y).normalize_or_zero();
+    if forward == Vec3::ZERO || up == Vec3::ZERO || forward.cross(up).length() < 1e-3 {
+        return Err("the camera's transform leaves it no viewing direction (a zero or degenerate scale)".into());
+    }
+    Ok(View { name: "default".into(), eye, target: eye + forward, up, fov_y: yfov.to_degrees() })
+}
+
+/// Total area of an object's emissive triangles.
+fn emitting_area(object: &Object, materials: &[Material]) -> f32 {
+    object
+        .parts
+        .iter()
+        .filter(|p| materials[p.material as usize].is_emissive())
+        .flat_map(|p| &object.triangles[p.triangles.start as usize..p.triangles.end as usize])
+        .map(|t| {
+            let [a, b, c] = t.map(|i| object.positions[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum()
 }
 
 struct Importer<'a> {
@@ -283,27 +314,58 @@ struct Importer<'a> {
 }
 
 impl Importer<'_> {
-    fn material(&mut self, m: &gltf::Material) -> Material {
-        let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("materials[{}]", m.index().unwrap_or(0)));
+    /// The material, with every factor checked against the range glTF gives it: values
+    /// outside would make negative or non-finite radiance.
+    fn material(&mut self, m: &gltf::Material) -> Result<Material, SceneError> {
+        let index = m.index().unwrap_or(0);
+        let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("materials[{index}]"));
+        let element = match m.name() {
+            Some(n) => format!("materials[{index}] {n:?}"),
+            None => format!("materials[{index}]"),
+        };
         let pbr = m.pbr_metallic_roughness();
         let [r, g, b, _alpha] = pbr.base_color_factor();
+        let unit = |v: f32| (0.0..=1.0).contains(&v);
+        let checks = [
+            ("baseColorFactor", [r, g, b].into_iter().all(unit)),
+            ("metallicFactor", unit(pbr.metallic_factor())),
+            ("roughnessFactor", unit(pbr.roughness_factor())),
+            ("emissiveFactor", m.emissive_factor().into_iter().all(unit)),
+            ("emissiveStrength", m.emissive_strength().is_none_or(|s| (0.0..=MAX_EMISSIVE_STRENGTH).contains(&s))),
+            ("specularFactor", m.specular().is_none_or(|s| unit(s.specular_factor()))),
+        ];
+        if let Some((key, _)) = checks.iter().find(|(_, ok)| !ok) {
+            let value = match *key {
+                "baseColorFactor" => format!("{:?}", [r, g, b]),
+                "metallicFactor" => pbr.metallic_factor().to_string(),
+                "roughnessFactor" => pbr.roughness_factor().to_string(),
+                "emissiveFactor" => format!("{:?}", m.emissive_factor()),
+                "emissiveStrength" => format!("{:?}", m.emissive_strength()),
+                _ => format!("{:?}", m.specular().map(|s| s.specular_factor())),
+            };
+            let range = match *key {
+                "emissiveStrength" => format!("between 0 and {MAX_EMISSIVE_STRENGTH:e}"),
+                _ => "between 0 and 1".into(),
+            };
+            return Err(SceneError::new(self.file, element, format!("{key} {value} must be {range}")));
+        }
         let base_color_texture = pbr.base_color_texture().map(|t| self.texture(&name, &t, ColorSpace::Srgb));
         let metallic_roughness_texture =
             pbr.metallic_roughness_texture().map(|t| self.texture(&name, &t, ColorSpace::Linear));
         if m.emissive_texture().is_some() {
             self.warnings.push(format!("material {name:?}: emissive texture ignored (the factor is used)"));
         }
-        Material {
+        Ok(Material {
             base_color: Vec3::new(r, g, b),
             base_color_texture,
-            metallic: pbr.metallic_factor().clamp(0.0, 1.0),
-            roughness: pbr.roughness_factor().clamp(0.0, 1.0),
+            metallic: pbr.metallic_factor(),
+            roughness: pbr.roughness_factor(),
             metallic_roughness_texture,
             emission: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
-            specular: m.specular().map_or(1.0, |s| s.specular_factor().clamp(0.0, 1.0)),
+            specular: m.specular().map_or(1.0, |s| s.specular_factor()),
             double_sided: m.double_sided(),
             name,
-        }
+        })
     }
 
     fn texture(&mut self, material: &str, info: &gltf::texture::Info, space: ColorSpace) -> u32 {
@@ -364,16 +426,31 @@ impl Importer<'_> {
                 *skipped += 1;
                 continue;
             }
+            let position_count = prim.get(&gltf::Semantic::Positions).map(|a| a.count());
             for (semantic, accessor) in prim.attributes() {
-                if matches!(
-                    semantic,
-                    gltf::Semantic::Positions | gltf::Semantic::Normals | gltf::Semantic::TexCoords(0)
-                ) {
-                    self.check_accessor(&accessor)?;
+                let role = match semantic {
+                    gltf::Semantic::Positions => Role::Position,
+                    gltf::Semantic::Normals => Role::Normal,
+                    gltf::Semantic::TexCoords(0) => Role::TexCoord,
+                    _ => continue,
+                };
+                self.check_accessor(&accessor, role)?;
+                if position_count.is_some_and(|n| n != accessor.count()) {
+                    return Err(SceneError::new(
+                        self.file,
+                        &element,
+                        format!(
+                            "{} (accessors[{}]) has {} elements but POSITION has {}",
+                            role.name(),
+                            accessor.index(),
+                            accessor.count(),
+                            position_count.unwrap_or(0)
+                        ),
+                    ));
                 }
             }
             if let Some(indices) = prim.indices() {
-                self.check_accessor(&indices)?;
+                self.check_accessor(&indices, Role::Indices)?;
             }
             let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
             let local: Vec<Vec3> = reader
@@ -409,6 +486,17 @@ impl Importer<'_> {
                 None => vec![Vec2::ZERO; local.len()],
             };
             let positions: Vec<Vec3> = local.iter().map(|&p| world.transform_point3(p)).collect();
+            if let Some(i) = positions.iter().position(|p| !p.is_finite() || p.abs().max_element() > MAX_COORDINATE) {
+                return Err(SceneError::new(
+                    self.file,
+                    &element,
+                    format!(
+                        "vertex {i} lies at {} in the world, more than {MAX_COORDINATE:e} m from the origin on an \
+                         axis (check the node's scale and the file's units)",
+                        positions[i]
+                    ),
+                ));
+            }
 
             let base = object.positions.len() as u32;
             let first = object.triangles.len() as u32;
@@ -438,11 +526,28 @@ impl Importer<'_> {
         Ok(object)
     }
 
-    /// Checks that an accessor's elements lie inside its buffer view and the view inside its
-    /// buffer, so that reading it cannot go out of bounds.
-    fn check_accessor(&self, accessor: &gltf::Accessor) -> Result<(), SceneError> {
+    /// Checks that an accessor has a type glTF allows for its role, that its elements lie
+    /// inside its buffer view and the view inside its buffer, so that reading it cannot go out
+    /// of bounds.
+    fn check_accessor(&self, accessor: &gltf::Accessor, role: Role) -> Result<(), SceneError> {
+        use gltf::accessor::{DataType as T, Dimensions as D};
         let element = format!("accessors[{}]", accessor.index());
         let fail = |problem: String| Err(SceneError::new(self.file, &element, problem));
+        let (kind, dimensions, normalized) = (accessor.data_type(), accessor.dimensions(), accessor.normalized());
+        let allowed = match role {
+            Role::Position | Role::Normal => dimensions == D::Vec3 && kind == T::F32,
+            Role::TexCoord => {
+                dimensions == D::Vec2 && (kind == T::F32 || (matches!(kind, T::U8 | T::U16) && normalized))
+            }
+            Role::Indices => dimensions == D::Scalar && matches!(kind, T::U8 | T::U16 | T::U32) && !normalized,
+        };
+        if !allowed {
+            return fail(format!(
+                "{dimensions:?} of {kind:?}{} is not a type glTF allows for {}",
+                if normalized { " (normalized)" } else { "" },
+                role.name()
+            ));
+        }
         if accessor.sparse().is_some() {
             return fail("sparse accessors are not supported".into());
         }
@@ -450,21 +555,30 @@ impl Importer<'_> {
             return fail("has no bufferView".into());
         };
         let buffer_len = self.buffers[view.buffer().index()].len();
-        if view.offset() + view.length() > buffer_len {
+        let view_end = view.offset().checked_add(view.length());
+        if view_end.is_none_or(|end| end > buffer_len) {
             return fail(format!(
-                "bufferViews[{}] ends at byte {} but buffers[{}] holds only {buffer_len} bytes",
+                "bufferViews[{}] reaches past the end of buffers[{}] ({buffer_len} bytes)",
                 view.index(),
-                view.offset() + view.length(),
                 view.buffer().index()
             ));
         }
         let element_size = accessor.size();
         let stride = view.stride().unwrap_or(element_size);
+        if stride < element_size {
+            return fail(format!(
+                "bufferViews[{}] has a byteStride of {stride}, less than the {element_size} bytes of one element",
+                view.index()
+            ));
+        }
         if accessor.count() > 0 {
-            let end = accessor.offset() + stride * (accessor.count() - 1) + element_size;
-            if end > view.length() {
+            let end = (accessor.count() - 1)
+                .checked_mul(stride)
+                .and_then(|n| n.checked_add(accessor.offset()))
+                .and_then(|n| n.checked_add(element_size));
+            if end.is_none_or(|end| end > view.length()) {
                 return fail(format!(
-                    "{} elements need {end} bytes but bufferViews[{}] holds only {}",
+                    "{} elements reach past the end of bufferViews[{}] ({} bytes)",
                     accessor.count(),
                     view.index(),
                     view.length()
@@ -472,6 +586,26 @@ impl Importer<'_> {
             }
         }
         Ok(())
+    }
+}
+
+/// What an accessor is read as.
+#[derive(Clone, Copy)]
+enum Role {
+    Position,
+    Normal,
+    TexCoord,
+    Indices,
+}
+
+impl Role {
+    fn name(self) -> &'static str {
+        match self {
+            Role::Position => "POSITION",
+            Role::Normal => "NORMAL",
+            Role::TexCoord => "TEXCOORD_0",
+            Role::Indices => "indices",
+        }
     }
 }
 

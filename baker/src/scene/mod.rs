@@ -10,6 +10,7 @@
 //! names must be unique.
 
 mod error;
+mod external;
 mod gltf_import;
 mod sidecar;
 mod texture;
@@ -22,6 +23,10 @@ use glam::{Vec2, Vec3};
 pub use error::SceneError;
 pub use sidecar::{Aabb, BakeOverrides, BakePresets, Sidecar, ViewSpec};
 pub use texture::{ColorSpace, Texture};
+
+/// Largest distance from the origin, per axis, of anything in a scene (vertices, boxes,
+/// views), in metres: a thousand kilometres. Beyond it, areas and BVH costs overflow f32.
+pub const MAX_COORDINATE: f32 = 1.0e6;
 
 /// File names looked for in a scene folder.
 pub const GLTF_NAMES: [&str; 2] = ["scene.gltf", "scene.glb"];
@@ -139,7 +144,16 @@ impl Scene {
     /// glTF file (with an optional sidecar of the same stem and extension `.toml`).
     pub fn load(path: &Path) -> Result<Self, SceneError> {
         let (gltf_path, sidecar_path, name) = locate(path)?;
-        gltf_import::import(&gltf_path, sidecar_path.as_deref(), name)
+        let bytes =
+            std::fs::read(&gltf_path).map_err(|e| SceneError::new(&gltf_path, "", format!("cannot read: {e}")))?;
+        gltf_import::import(&gltf_path, &bytes, sidecar_path.as_deref(), name)
+    }
+
+    /// Imports glTF or GLB `bytes` as if read from `file`, without a sidecar: external buffers
+    /// and images resolve against `file`'s folder.
+    pub fn from_gltf_bytes(file: &Path, bytes: &[u8]) -> Result<Self, SceneError> {
+        let name = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        gltf_import::import(file, bytes, None, name)
     }
 
     pub fn triangle_count(&self) -> usize {

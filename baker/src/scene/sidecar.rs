@@ -26,6 +26,7 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use super::error::SceneError;
+use super::MAX_COORDINATE;
 
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -72,6 +73,7 @@ pub struct BakePresets {
 }
 
 /// Settings of a bake preset that a scene may override; unset fields keep the preset's value.
+/// Each must lie in its [`BakeOverrides::RANGES`] range.
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BakeOverrides {
@@ -92,6 +94,22 @@ pub struct BakeOverrides {
 pub struct Aabb {
     pub min: Vec3,
     pub max: Vec3,
+}
+
+impl BakeOverrides {
+    /// The accepted range of each setting: at least 1, and at most what a bake can hold
+    /// (the samples of a bake are about configurations × rays × 80 bytes).
+    pub const RANGES: [(&'static str, u32, u32); 5] = [
+        ("configurations", 1, 65_536),
+        ("rays_per_configuration", 1, 1_000_000),
+        ("paths_per_sample", 1, 65_536),
+        ("max_depth", 1, 64),
+        ("max_iterations", 1, 100_000),
+    ];
+
+    fn values(&self) -> [Option<u32>; 5] {
+        [self.configurations, self.rays_per_configuration, self.paths_per_sample, self.max_depth, self.max_iterations]
+    }
 }
 
 impl Aabb {
@@ -128,8 +146,12 @@ impl Sidecar {
         }
         for (name, view) in &self.views {
             let element = format!("views.{name}");
-            if !view.eye.iter().chain(&view.target).all(|v| v.is_finite()) {
-                return Err(SceneError::new(file, element, "eye and target must be finite"));
+            if !view.eye.iter().chain(&view.target).all(|v| v.abs() <= MAX_COORDINATE) {
+                return Err(SceneError::new(
+                    file,
+                    element,
+                    format!("eye and target must be finite and within {MAX_COORDINATE:e} m from the origin"),
+                ));
             }
             if Vec3::from(view.eye).distance(Vec3::from(view.target)) < 1e-6 {
                 return Err(SceneError::new(file, element, "eye and target are the same point"));
@@ -138,13 +160,30 @@ impl Sidecar {
                 return Err(SceneError::new(file, element + ".fov_y", "must be between 0 and 180 degrees"));
             }
         }
+        let presets = [("test", &self.bake.test), ("preview", &self.bake.preview), ("final", &self.bake.final_)];
+        for (preset, overrides) in presets {
+            let Some(overrides) = overrides else { continue };
+            for ((key, min, max), value) in BakeOverrides::RANGES.iter().zip(overrides.values()) {
+                if value.is_some_and(|v| !(*min..=*max).contains(&v)) {
+                    return Err(SceneError::new(
+                        file,
+                        format!("bake.{preset}.{key}"),
+                        format!("{} is outside the accepted range {min} to {max}", value.unwrap_or(0)),
+                    ));
+                }
+            }
+        }
         Ok(())
     }
 }
 
 fn check_box(file: &Path, key: &str, min: [f32; 3], max: [f32; 3]) -> Result<(), SceneError> {
-    if !min.iter().chain(&max).all(|v| v.is_finite()) {
-        return Err(SceneError::new(file, key, "min and max must be finite"));
+    if !min.iter().chain(&max).all(|v| v.abs() <= MAX_COORDINATE) {
+        return Err(SceneError::new(
+            file,
+            key,
+            format!("min and max must be finite and within {MAX_COORDINATE:e} m from the origin"),
+        ));
     }
     for (axis, name) in ["x", "y", "z"].iter().enumerate() {
         if min[axis] > max[axis] {
