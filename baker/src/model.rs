@@ -5,6 +5,10 @@
 //! `w3` [3, 10], `b3` [3], all f32. The metadata key `rrf` holds [`Metadata`] as JSON: the
 //! format version, the scene's content hash, per network the input ranges and the target
 //! transform, training statistics, the bake settings, and a checksum of the tensor data.
+//! Nothing in the file depends on when or how fast it was baked (no timings, no dates), so
+//! the same scene, settings and seed give the same bytes: an interrupted and resumed bake is
+//! byte-identical to an uninterrupted one. (Models of rrf 0.1 also recorded per-network
+//! training seconds; the field is ignored when read.)
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -77,7 +81,6 @@ pub struct NetworkInfo {
     pub train_mse: f64,
     pub val_mse: f64,
     pub iterations: u32,
-    pub train_seconds: f64,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -221,8 +224,16 @@ impl Model {
                     info.component.name()
                 ));
             }
+            let name = format!("network {}/{}", info.object, info.component.name());
             if info.target_transform != "scale" || !(info.output_scale.is_finite() && info.output_scale > 0.0) {
-                return Err(format!("network {}/{}: unknown target transform", info.object, info.component.name()));
+                return Err(format!("{name}: unknown target transform"));
+            }
+            if !info.input_min.iter().zip(&info.input_max).all(|(lo, hi)| lo.is_finite() && hi.is_finite() && lo <= hi)
+            {
+                return Err(format!("{name}: input ranges must be finite with min ≤ max"));
+            }
+            if let Some(i) = params.iter().position(|p| !p.is_finite()) {
+                return Err(format!("{name}: parameter {i} is not finite; re-bake the model"));
             }
             let network = Network {
                 object: info.object.clone(),

@@ -422,7 +422,6 @@ fn train_network(
         train_mse: result.train_mse * scale2,
         val_mse: result.val_mse * scale2,
         iterations: result.iterations,
-        train_seconds: start.elapsed().as_secs_f64(),
     };
     (Network { object: name, component, input_min, input_max, output_scale: rms, params: result.params }, info)
 }
