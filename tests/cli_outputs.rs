@@ -80,3 +80,21 @@ fn a_closed_standard_output_ends_quietly() {
     child.wait().unwrap();
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn counts_outside_their_documented_range_are_refused() {
+    for (args, flag) in [
+        (&["eval", "scenes/cornell-box", "--configs", "1000000000000", "-o", "x"][..], "--configs"),
+        (&["eval", "scenes/cornell-box", "--configs", "18446744073709551615", "-o", "x"][..], "--configs"),
+        (&["eval", "scenes/cornell-box", "--spp", "0", "-o", "x"][..], "--spp"),
+        (&["reference", "scenes/cornell-box", "--spp", "4294967295", "-o", "x.png"][..], "--spp"),
+        (&["reference", "scenes/cornell-box", "--max-depth", "0", "-o", "x.png"][..], "--max-depth"),
+        (&["bench", "scenes/cornell-box", "--frames", "0"][..], "--frames"),
+    ] {
+        let run = rrf(args, &[]);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        // clap's usage error: exit 2, the flag and its range named; never an abort (134).
+        assert_eq!(run.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(flag) && stderr.contains("in "), "{args:?}: {stderr}");
+    }
+}

@@ -42,8 +42,7 @@ fn interrupted_bake_resumes_to_the_same_model() {
 
     // An interrupted bake: half the shards finished, one half-written shard left behind.
     let partial_cache = scratch("partial");
-    let mut shards: Vec<_> = std::fs::read_dir(&full_cache).unwrap().map(|e| e.unwrap().path()).collect();
-    shards.sort();
+    let shards = cache_files(&full_cache, "shard-");
     let keep = shards.len() / 2;
     for shard in &shards[..keep] {
         std::fs::copy(shard, partial_cache.join(shard.file_name().unwrap())).unwrap();
@@ -58,10 +57,64 @@ fn interrupted_bake_resumes_to_the_same_model() {
         "a resumed bake must give a model file byte-identical to the uninterrupted one"
     );
 
+    // A shard whose bytes were damaged on disk is recomputed, not trusted.
+    let damaged_cache = scratch("damaged");
+    for file in cache_files(&full_cache, "shard-") {
+        let mut bytes = std::fs::read(&file).unwrap();
+        if file.ends_with("shard-00001.bin") {
+            let middle = bytes.len() / 2;
+            bytes[middle] ^= 0x10;
+        }
+        std::fs::write(damaged_cache.join(file.file_name().unwrap()), bytes).unwrap();
+    }
+    let (repaired, report) = test_bake(&scene, &damaged_cache);
+    assert_eq!((report.resumed_shards, report.corrupt_files), (report.shards - 1, 1));
+    assert!(repaired.to_bytes().unwrap() == full.to_bytes().unwrap());
+
+    // Killed during training: the networks already trained are kept, the rest trained again.
+    let networks = cache_files(&full_cache, "network-");
+    assert_eq!(networks.len(), full.networks.len(), "one checkpoint per trained network");
+    let training_cache = scratch("training");
+    for file in cache_files(&full_cache, "shard-").iter().chain(&networks[..networks.len() / 2]) {
+        std::fs::copy(file, training_cache.join(file.file_name().unwrap())).unwrap();
+    }
+    let (resumed, report) = test_bake(&scene, &training_cache);
+    assert_eq!((report.resumed_shards, report.resumed_networks), (report.shards, networks.len() / 2));
+    assert!(resumed.to_bytes().unwrap() == full.to_bytes().unwrap());
+    assert_eq!(report.non_finite_dropped, 0, "no shard was traced again");
+    let (_, report) = test_bake(&scene, &scratch("fresh"));
+    assert_eq!(report.non_finite_dropped, 0, "the Cornell box's paths are all finite");
+
     // Different settings never reuse shards made with others.
     let other = BakeSettings::new(Quality::Test, 4, &scene);
     let (_, report) = bake(&scene, &other, &partial_cache, &Quiet).unwrap();
     assert_eq!(report.resumed_shards, 0);
+}
+
+/// The cache files whose names start with `prefix`, sorted.
+fn cache_files(cache: &Path, prefix: &str) -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(cache)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with(prefix))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn bakes_too_large_to_hold_are_refused_before_any_work() {
+    let mut scene = scene("cornell-box");
+    scene.bake.test = Some(rrf_baker::scene::BakeOverrides {
+        configurations: Some(65_536),
+        rays_per_configuration: Some(1_000_000),
+        ..Default::default()
+    });
+    let settings = BakeSettings::new(Quality::Test, 1, &scene);
+    let cache = scratch("too-large").join("cache");
+    let message = bake(&scene, &settings, &cache, &Quiet).unwrap_err().to_string();
+    assert!(message.contains("GiB of samples") && message.contains("[bake]"), "{message}");
+    assert!(!cache.exists(), "nothing was written");
 }
 
 #[test]

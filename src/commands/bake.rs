@@ -2,8 +2,9 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
+use rrf_baker::bake::lock::BakeLock;
 use rrf_baker::bake::{bake, BakeProgress, BakeSettings, Quality};
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
@@ -29,14 +30,16 @@ pub struct BakeArgs {
     /// sidecar may override it ([bake.test], [bake.preview], [bake.final]).
     #[arg(long, value_enum, default_value_t = QualityArg::Final)]
     pub quality: QualityArg,
-    /// Random seed: the same seed gives the same model.
+    /// Random seed, any 64-bit integer: the same seed gives the same model.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Model file to write; default: model.safetensors in the scene's folder.
+    /// Model file to write (.safetensors); default: model.safetensors in the scene's folder.
+    /// While it bakes, MODEL.lock keeps a second bake of the same model out.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Keep the sample shards (MODEL.bake-cache/) after a successful bake. An interrupted bake
-    /// always keeps them, and resumes from them when started again with the same settings.
+    /// Keep the bake cache (MODEL.bake-cache/: sample shards and trained networks) after a
+    /// successful bake. A bake that is interrupted (Ctrl-C, a kill, a crash) always keeps it,
+    /// and the same command started again resumes from it and writes the same model.
     #[arg(long)]
     pub keep_samples: bool,
     /// Print one line of JSON with the figures of the bake.
@@ -74,6 +77,37 @@ pub fn model_to_render(scene: &Scene, path: Option<&Path>) -> Result<Model> {
     Ok(model)
 }
 
+/// A model goes to a `.safetensors` file in a folder that exists, never over the scene.
+fn check_output(output: &Path) -> Result<()> {
+    if output.extension().and_then(|e| e.to_str()) != Some("safetensors") {
+        bail!("{}: a model file must end in .safetensors", output.display());
+    }
+    let folder = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !folder.is_dir() {
+        bail!("{}: the folder {} does not exist", output.display(), folder.display());
+    }
+    Ok(())
+}
+
+/// Ctrl-C ends the bake at once: everything finished is already in the cache (every cache
+/// file is written whole or not at all), so nothing is lost. Says how to resume.
+fn stop_on_ctrl_c(lock: PathBuf, cache: &Path) {
+    let command: Vec<String> = std::iter::once("rrf".to_string()).chain(std::env::args().skip(1)).collect();
+    let message = format!(
+        "\ninterrupted: finished samples and networks are kept in {}; to resume, run the same command again:\n  {}",
+        cache.display(),
+        command.join(" ")
+    );
+    let handler = move || {
+        let _ = std::fs::remove_file(&lock);
+        eprintln!("{message}");
+        std::process::exit(130);
+    };
+    if let Err(e) = ctrlc::set_handler(handler) {
+        eprintln!("warning: cannot catch Ctrl-C ({e}); an interrupted bake still resumes");
+    }
+}
+
 pub fn run(args: &BakeArgs) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
     for warning in &scene.warnings {
@@ -86,7 +120,10 @@ pub fn run(args: &BakeArgs) -> Result<()> {
     };
     let settings = BakeSettings::new(quality, args.seed, &scene);
     let output = args.output.clone().unwrap_or_else(|| default_model_path(&scene));
+    check_output(&output)?;
     let cache = output.with_extension("bake-cache");
+    let lock = BakeLock::acquire(&output)?;
+    stop_on_ctrl_c(lock.path().to_path_buf(), &cache);
     let bars = Bars {
         sampling: Progress::new(u64::from(settings.configurations), "sampling", args.json),
         training: Progress::new(1, "training", args.json),
@@ -98,6 +135,7 @@ pub fn run(args: &BakeArgs) -> Result<()> {
     if !args.keep_samples {
         std::fs::remove_dir_all(&cache).with_context(|| format!("cannot remove {}", cache.display()))?;
     }
+    drop(lock);
 
     let networks: Vec<_> = model
         .metadata
@@ -121,25 +159,38 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             "sample_seconds": report.sample_seconds,
             "train_seconds": report.train_seconds,
             "resumed_shards": report.resumed_shards,
+            "resumed_networks": report.resumed_networks,
+            "corrupt_cache_files": report.corrupt_files,
+            "non_finite_dropped": report.non_finite_dropped,
             "networks": networks,
             "untrained": model.metadata.untrained,
         });
         println!("{line}");
         return Ok(());
     }
+    let resumed = |done: usize, of: usize, what: &str| match done {
+        0 => String::new(),
+        _ => format!(" ({done} of {of} {what} resumed from {})", cache.display()),
+    };
     eprintln!(
-        "sampled {} samples ({} paths) in {:.1} s{}; trained {} networks in {:.1} s",
+        "sampled {} samples ({} paths) in {:.1} s{}; trained {} networks in {:.1} s{}",
         report.samples,
         report.paths,
         report.sample_seconds,
-        if report.resumed_shards > 0 {
-            format!(", {} of {} shards resumed from {}", report.resumed_shards, report.shards, cache.display())
-        } else {
-            String::new()
-        },
+        resumed(report.resumed_shards, report.shards, "shards"),
         model.networks.len(),
-        report.train_seconds
+        report.train_seconds,
+        resumed(report.resumed_networks, model.networks.len(), "networks"),
     );
+    if report.corrupt_files > 0 {
+        eprintln!("warning: {} damaged files in the bake cache were recomputed", report.corrupt_files);
+    }
+    if report.non_finite_dropped > 0 {
+        eprintln!(
+            "warning: the path tracer dropped {} non-finite contributions (degenerate geometry or materials?)",
+            report.non_finite_dropped
+        );
+    }
     eprintln!(
         "\n  {:<18} {:<9} {:>8} {:>11} {:>11} {:>5}",
         "object", "component", "samples", "train MSE", "val MSE", "iter"

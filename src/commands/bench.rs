@@ -67,8 +67,8 @@ pub struct BenchArgs {
     /// Frame size in pixels.
     #[arg(long, default_value = "512x512", value_name = "WxH")]
     pub size: String,
-    /// Frames to time (after two warm-up frames).
-    #[arg(long, default_value_t = 30)]
+    /// Frames to time (after two warm-up frames), 1 to 100,000.
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=100_000))]
     pub frames: u32,
     /// Network pass variant to time: tiled, per-object, storage (see `rrf render --help`), or
     /// all of them one after the other.

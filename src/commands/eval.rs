@@ -35,17 +35,18 @@ pub struct EvalArgs {
     #[arg(long)]
     pub model: Option<PathBuf>,
     /// Random configurations (Latin hypercube over the light and camera boxes), on top of one
-    /// per named view of the sidecar.
-    #[arg(long, default_value_t = 6)]
-    pub configs: usize,
-    /// Samples per pixel of the path-traced references (cached under the scene's .cache/).
-    #[arg(long, default_value_t = 256)]
+    /// per named view of the sidecar; 0 to 10,000.
+    #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=10_000))]
+    pub configs: u32,
+    /// Samples per pixel of the path-traced references (cached under the scene's .cache/);
+    /// 1 to 1,048,576.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub spp: u32,
     /// Image size in pixels.
     #[arg(long, default_value = "256x256", value_name = "WxH")]
     pub size: String,
-    /// Seed of the held-out configurations and of the references' paths. Eval's configurations
-    /// come from a stream that baking never uses, whatever the two seeds.
+    /// Seed of the held-out configurations and of the references' paths, any 64-bit integer.
+    /// Eval's configurations come from a stream that baking never uses, whatever the two seeds.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Predict with the CPU reference inference instead of the Vulkan renderer (the fallback
@@ -84,7 +85,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let model_path = args.model.clone().unwrap_or_else(|| default_model_path(&scene));
     let model = Model::load(&model_path, Some(&scene))?;
     let geometry = Geometry::new(&scene);
-    let configs = held_out(&scene, &geometry, args.configs, args.seed)?;
+    let configs = held_out(&scene, &geometry, args.configs as usize, args.seed)?;
     std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create {}", args.output.display()))?;
 
     let predictor = if args.cpu {

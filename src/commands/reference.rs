@@ -17,19 +17,20 @@ use crate::progress::Progress;
 pub struct ReferenceArgs {
     #[command(flatten)]
     pub view: ViewArgs,
-    /// Samples (paths) per pixel.
-    #[arg(long, default_value_t = 64)]
+    /// Samples (paths) per pixel, 1 to 1,048,576.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub spp: u32,
-    /// Longest path in segments from the camera: 1 shows emitters only, 2 adds direct light.
-    #[arg(long, default_value_t = 8)]
+    /// Longest path in segments from the camera, 1 to 1024: 1 shows emitters only, 2 adds
+    /// direct light.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..=1024))]
     pub max_depth: u32,
-    /// Russian roulette from this many segments on; 0 turns it off.
-    #[arg(long, default_value_t = 5)]
+    /// Russian roulette from this many segments on, up to 1024; 0 turns it off.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(0..=1024))]
     pub rr_depth: u32,
     /// Which light to show.
     #[arg(long, value_enum, default_value_t = Component::Gi)]
     pub component: Component,
-    /// Random seed: the same seed gives the same image.
+    /// Random seed, any 64-bit integer: the same seed gives the same image.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Output: .exr (linear HDR) or .png (tonemapped).

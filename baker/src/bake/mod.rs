@@ -1,12 +1,15 @@
 //! Baking: training samples from the path tracer, then two networks per object.
 //!
-//! Sampling is written in shards of a few configurations as it goes, each shard keyed by the
-//! scene and every setting that shapes its samples. A bake killed at any point and started
-//! again keeps the finished shards, computes the rest, and ends with the same model as an
-//! uninterrupted bake with the same seed: every shard is a pure function of its key, and
-//! training is deterministic.
+//! A bake writes its work to the cache as it goes: sampling in shards of a few
+//! configurations, training one checkpoint per finished network, each file keyed by the scene
+//! and every setting that shapes it ([`cache`]). A bake killed at any point and started again
+//! keeps the finished shards and networks, computes the rest, and ends with a model file
+//! byte-identical to an uninterrupted bake with the same seed: every shard and network is a
+//! pure function of its key, and the model records no timings.
 
+mod cache;
 pub mod lm;
+pub mod lock;
 pub mod samples;
 
 use std::path::{Path, PathBuf};
@@ -19,10 +22,12 @@ use crate::hash::Fnv64;
 use crate::model::{Metadata, Model, NetworkInfo, Untrained, FORMAT_VERSION, INPUT_NAMES};
 use crate::network::{normalize, Component, Network, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS};
 use crate::scene::{BakeOverrides, Scene};
+use crate::trace::integrator::non_finite_dropped;
 use crate::trace::sampling::{mix64, Rng};
 use crate::trace::{Geometry, TraceSettings};
 use lm::{initial_parameters, Dataset, LmSettings};
-use samples::{latin_hypercube, sample_configuration, Sample};
+use samples::{latin_hypercube, sample_configuration, Sample, SAMPLE_BYTES};
+use serde::Deserialize;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -141,7 +146,23 @@ pub enum BakeError {
     NoDomains { scene: PathBuf },
     #[error("{}: {problem}", path.display())]
     Io { path: PathBuf, problem: String },
+    #[error(
+        "{}: another bake (process {pid}) is writing this model; wait for it to finish, or delete {} if no bake is running",
+        model.display(), lock.display()
+    )]
+    Locked { model: PathBuf, lock: PathBuf, pid: u32 },
+    #[error(
+        "{}: {configurations} configurations × {rays} rays could make {:.1} GiB of samples, more than the {} GiB a bake may hold; lower them in the sidecar's [bake] section",
+        scene.display(), *bytes as f64 / GIB, MAX_SAMPLE_BYTES / (1 << 30)
+    )]
+    TooLarge { scene: PathBuf, configurations: u32, rays: u32, bytes: u64 },
 }
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// The most sample memory a bake may need (every ray a hit): beyond it, the settings are a
+/// mistake rather than a bake.
+pub const MAX_SAMPLE_BYTES: u64 = 16 << 30;
 
 #[derive(Clone, Debug, Serialize)]
 pub struct BakeReport {
@@ -152,9 +173,23 @@ pub struct BakeReport {
     /// Shards found finished on disk from an earlier, interrupted bake.
     pub resumed_shards: usize,
     pub shards: usize,
+    /// Networks found trained on disk from an earlier, interrupted bake.
+    pub resumed_networks: usize,
+    /// Cache files with the right key whose contents did not match their checksum: recomputed.
+    pub corrupt_files: usize,
+    /// Path contributions this bake's sampling dropped as non-finite (0 in the shipped scenes).
+    pub non_finite_dropped: u64,
 }
 
-const SHARD_MAGIC: &[u8; 8] = b"RRFSHRD1";
+const SHARD_MAGIC: &[u8; 8] = b"RRFSHRD2";
+const NETWORK_MAGIC: &[u8; 8] = b"RRFNETW1";
+
+/// A trained network as its checkpoint file holds it (JSON: f32 and f64 round-trip exactly).
+#[derive(Serialize, Deserialize)]
+struct Checkpoint {
+    info: NetworkInfo,
+    params: Vec<f32>,
+}
 
 /// Bakes `scene`, keeping sample shards in `cache` (created if needed).
 pub fn bake(
@@ -166,6 +201,15 @@ pub fn bake(
     let (Some(light), Some(camera)) = (&scene.moving_light, &scene.camera_box) else {
         return Err(BakeError::NoDomains { scene: scene.gltf_path.clone() });
     };
+    let bytes = u64::from(settings.configurations) * u64::from(settings.rays_per_configuration) * SAMPLE_BYTES as u64;
+    if bytes > MAX_SAMPLE_BYTES {
+        return Err(BakeError::TooLarge {
+            scene: scene.gltf_path.clone(),
+            configurations: settings.configurations,
+            rays: settings.rays_per_configuration,
+            bytes,
+        });
+    }
     std::fs::create_dir_all(cache)
         .map_err(|e| BakeError::Io { path: cache.to_path_buf(), problem: format!("cannot create: {e}") })?;
     let geometry = Geometry::new(scene);
@@ -173,6 +217,8 @@ pub fn bake(
 
     // Sampling, shard by shard.
     let start = Instant::now();
+    let dropped_before = non_finite_dropped();
+    let corrupt = std::sync::atomic::AtomicUsize::new(0);
     let settings_json = serde_json::to_string(&SamplingKey::from(settings)).expect("settings serialise");
     let shard_size = settings.shard_configurations.max(1) as usize;
     let shard_count = configs.len().div_ceil(shard_size);
@@ -191,9 +237,16 @@ pub fn bake(
                 let d = done.fetch_add(n as u64, std::sync::atomic::Ordering::SeqCst) + n as u64;
                 progress.sampled(d, total);
             };
-            if let Some(samples) = read_shard(&path, key.0) {
-                report(range.len());
-                return Ok((samples, true));
+            match cache::read(&path, SHARD_MAGIC, key.0) {
+                cache::Cached::Found(bytes) => match samples::decode(&bytes, scene.objects.len()) {
+                    Some(samples) => {
+                        report(range.len());
+                        return Ok((samples, true));
+                    }
+                    None => _ = corrupt.fetch_add(1, std::sync::atomic::Ordering::SeqCst),
+                },
+                cache::Cached::Corrupt => _ = corrupt.fetch_add(1, std::sync::atomic::Ordering::SeqCst),
+                cache::Cached::Missing => {}
             }
             let mut samples = Vec::new();
             for i in range {
@@ -209,7 +262,7 @@ pub fn bake(
                 ));
                 report(1);
             }
-            write_shard(&path, key.0, &samples)?;
+            cache::write(&path, SHARD_MAGIC, key.0, &samples::encode(&samples))?;
             Ok((samples, false))
         })
         .collect();
@@ -221,6 +274,7 @@ pub fn bake(
         all.extend(samples);
     }
     let sample_seconds = start.elapsed().as_secs_f64();
+    let non_finite_dropped = non_finite_dropped() - dropped_before;
 
     // Training: two networks per object that has samples.
     let start = Instant::now();
@@ -253,15 +307,58 @@ pub fn bake(
         }
     }
     let trained = std::sync::atomic::AtomicU64::new(0);
+    let resumed_networks = std::sync::atomic::AtomicUsize::new(0);
+    let settings_key = serde_json::to_string(settings).expect("settings serialise");
     let networks: Vec<(Network, NetworkInfo)> = jobs
         .par_iter()
         .map(|&(object, component)| {
-            let result = train_network(scene, settings, object, component, &by_object[object as usize]);
+            let mut key = Fnv64::default();
+            key.write(&scene.content_hash.to_le_bytes());
+            key.write(settings_key.as_bytes());
+            key.write(&[component as u8]);
+            key.write(&object.to_le_bytes());
+            let path = cache.join(format!("network-{object:05}-{}.bin", component.name()));
+            let checkpoint = match cache::read(&path, NETWORK_MAGIC, key.0) {
+                cache::Cached::Found(bytes) => match serde_json::from_slice::<Checkpoint>(&bytes) {
+                    Ok(c) if c.params.len() == crate::network::PARAMETERS => Some(c),
+                    _ => {
+                        corrupt.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                        None
+                    }
+                },
+                cache::Cached::Corrupt => {
+                    corrupt.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    None
+                }
+                cache::Cached::Missing => None,
+            };
+            let (network, info) = match checkpoint {
+                Some(Checkpoint { info, params }) => {
+                    resumed_networks.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
+                    let network = Network {
+                        object: info.object.clone(),
+                        component,
+                        input_min: std::array::from_fn(|i| info.input_min[i]),
+                        input_max: std::array::from_fn(|i| info.input_max[i]),
+                        output_scale: info.output_scale,
+                        params,
+                    };
+                    (network, info)
+                }
+                None => {
+                    let (network, info) =
+                        train_network(scene, settings, object, component, &by_object[object as usize]);
+                    let checkpoint = Checkpoint { info, params: network.params };
+                    let json = serde_json::to_vec(&checkpoint).expect("checkpoint serialises");
+                    cache::write(&path, NETWORK_MAGIC, key.0, &json)?;
+                    (Network { params: checkpoint.params, ..network }, checkpoint.info)
+                }
+            };
             let d = trained.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
             progress.trained(d, jobs.len() as u64);
-            result
+            Ok((network, info))
         })
-        .collect();
+        .collect::<Result<_, BakeError>>()?;
     let train_seconds = start.elapsed().as_secs_f64();
 
     let metadata = Metadata {
@@ -278,8 +375,17 @@ pub fn bake(
     };
     let model = Model { metadata, networks: networks.into_iter().map(|(n, _)| n).collect() };
     let paths = all.len() as u64 * u64::from(settings.paths_per_sample);
-    let report =
-        BakeReport { samples: all.len(), paths, sample_seconds, train_seconds, resumed_shards, shards: shard_count };
+    let report = BakeReport {
+        samples: all.len(),
+        paths,
+        sample_seconds,
+        train_seconds,
+        resumed_shards,
+        shards: shard_count,
+        resumed_networks: resumed_networks.into_inner(),
+        corrupt_files: corrupt.into_inner(),
+        non_finite_dropped,
+    };
     Ok((model, report))
 }
 
@@ -307,25 +413,6 @@ impl From<&BakeSettings> for SamplingKey {
             format: 1,
         }
     }
-}
-
-fn read_shard(path: &Path, key: u64) -> Option<Vec<Sample>> {
-    let bytes = std::fs::read(path).ok()?;
-    if bytes.len() < 16 || &bytes[..8] != SHARD_MAGIC || bytes[8..16] != key.to_le_bytes() {
-        return None;
-    }
-    samples::decode(&bytes[16..])
-}
-
-fn write_shard(path: &Path, key: u64, samples: &[Sample]) -> Result<(), BakeError> {
-    let mut bytes = SHARD_MAGIC.to_vec();
-    bytes.extend(key.to_le_bytes());
-    bytes.extend(samples::encode(samples));
-    // Written beside and renamed, so that a shard on disk is always whole.
-    let partial = path.with_extension("partial");
-    std::fs::write(&partial, bytes)
-        .and_then(|()| std::fs::rename(&partial, path))
-        .map_err(|e| BakeError::Io { path: path.to_path_buf(), problem: format!("cannot write sample shard: {e}") })
 }
 
 /// Input ranges for an object's networks: its bounding box for positions, the light's box for
@@ -394,7 +481,6 @@ fn train_network(
     component: Component,
     samples: &[&Sample],
 ) -> (Network, NetworkInfo) {
-    let start = Instant::now();
     let NetworkData { train, validation, input_min, input_max, output_scale: rms } =
         network_data(scene, settings, object, component, samples);
     let mut mean = [0.0f32; OUTPUTS];

@@ -107,8 +107,9 @@ pub fn encode(samples: &[Sample]) -> Vec<u8> {
 
 pub const SAMPLE_BYTES: usize = 4 * (1 + INPUTS + 6);
 
-/// Inverse of [`encode`]; `None` if the length is not a whole number of samples.
-pub fn decode(bytes: &[u8]) -> Option<Vec<Sample>> {
+/// Inverse of [`encode`]; `None` if the length is not a whole number of samples or a sample
+/// names an object past `objects`.
+pub fn decode(bytes: &[u8], objects: usize) -> Option<Vec<Sample>> {
     if bytes.len() % SAMPLE_BYTES != 0 {
         return None;
     }
@@ -125,6 +126,7 @@ pub fn decode(bytes: &[u8]) -> Option<Vec<Sample>> {
                     indirect: std::array::from_fn(|i| f(4 + INPUTS + i)),
                 }
             })
-            .collect(),
+            .collect::<Vec<_>>(),
     )
+    .filter(|samples| samples.iter().all(|s| (s.object as usize) < objects))
 }

@@ -11,6 +11,8 @@
 //! The three are disjoint sets of path contributions of one estimator, so they sum to the
 //! full radiance of the same paths.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use glam::Vec3;
 
 use super::sampling::{Frame, Rng};
@@ -39,6 +41,15 @@ pub struct Radiance {
     pub indirect: Vec3,
 }
 
+/// Contributions dropped because they were not finite (a degenerate BSDF sample or light
+/// sample), counted over the whole process: a bake reports how many its paths dropped.
+static NON_FINITE_DROPPED: AtomicU64 = AtomicU64::new(0);
+
+/// How many path contributions this process has dropped as non-finite so far.
+pub fn non_finite_dropped() -> u64 {
+    NON_FINITE_DROPPED.load(Ordering::Relaxed)
+}
+
 impl Radiance {
     pub fn gi(&self) -> Vec3 {
         self.emitted + self.direct + self.indirect
@@ -46,6 +57,7 @@ impl Radiance {
 
     fn add(&mut self, segments: u32, value: Vec3) {
         if !value.is_finite() {
+            NON_FINITE_DROPPED.fetch_add(1, Ordering::Relaxed);
             return;
         }
         match segments {
