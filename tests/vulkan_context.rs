@@ -76,6 +76,17 @@ fn bad_image_size_is_an_error_not_a_panic() {
     );
     let message = result.err().expect("a 0-pixel image must be refused").to_string();
     assert!(message.contains("\"empty\"") && message.contains("0x4"), "{message}");
+
+    // Within the side limit but beyond what one image may hold (lavapipe: 4 GiB): refused
+    // with its size before Vulkan sees it, so no validation message either.
+    let result = ctx.create_image(
+        "huge",
+        vk::Extent2D { width: 16384, height: 16384 },
+        vk::Format::R32G32B32A32_SFLOAT,
+        vk::ImageUsageFlags::STORAGE,
+    );
+    let message = result.err().expect("a 4 GiB image must be refused").to_string();
+    assert!(message.contains("\"huge\"") && message.contains("4.00 GiB"), "{message}");
     finish_clean(ctx);
 }
 

@@ -212,7 +212,7 @@ impl Context {
             buffer_device_address: false,
             allocation_sizes: Default::default(),
         })
-        .map_err(|source| Error::Allocation { name: "allocator".into(), source })?;
+        .map_err(|source| Error::Allocation { name: "allocator".into(), bytes: 0, source })?;
 
         let debug = match (debug_instance, messenger) {
             (Some(instance_fns), Some(messenger)) => Some(Debug {

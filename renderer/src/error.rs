@@ -32,9 +32,10 @@ pub enum Error {
     #[error("Vulkan call {call} failed: {result}")]
     Vulkan { call: &'static str, result: vk::Result },
 
-    #[error("GPU memory allocation for {name:?} failed: {source}")]
+    #[error("GPU memory allocation of {:.1} MiB for {name:?} failed: {source}", *bytes as f64 / 1048576.0)]
     Allocation {
         name: String,
+        bytes: u64,
         #[source]
         source: gpu_allocator::AllocationError,
     },

@@ -47,14 +47,7 @@ impl Image {
 
     /// Bytes per texel of the formats rrf uses (0 for others).
     pub fn texel_bytes(&self) -> u32 {
-        match self.format {
-            vk::Format::R32G32B32A32_SFLOAT => 16,
-            vk::Format::R16G16B16A16_SFLOAT => 8,
-            vk::Format::R32G32B32A32_UINT => 16,
-            vk::Format::R32_SFLOAT | vk::Format::R32_UINT | vk::Format::D32_SFLOAT => 4,
-            vk::Format::R8G8B8A8_UNORM | vk::Format::B8G8R8A8_UNORM => 4,
-            _ => 0,
-        }
+        texel_bytes(self.format)
     }
 
     pub fn pixel_count(&self) -> usize {
@@ -71,6 +64,18 @@ impl Destroy for Buffer {
 impl Destroy for Image {
     fn destroy(self, ctx: &Context) {
         ctx.destroy_image(self);
+    }
+}
+
+/// Bytes per texel of the formats rrf uses (0 for others).
+fn texel_bytes(format: vk::Format) -> u32 {
+    match format {
+        vk::Format::R32G32B32A32_SFLOAT => 16,
+        vk::Format::R16G16B16A16_SFLOAT => 8,
+        vk::Format::R32G32B32A32_UINT => 16,
+        vk::Format::R32_SFLOAT | vk::Format::R32_UINT | vk::Format::D32_SFLOAT => 4,
+        vk::Format::R8G8B8A8_UNORM | vk::Format::B8G8R8A8_UNORM => 4,
+        _ => 0,
     }
 }
 
@@ -112,6 +117,8 @@ impl Channel {
     }
 }
 
+const GIB: f64 = (1u64 << 30) as f64;
+
 impl Context {
     pub fn create_buffer(
         &self,
@@ -137,7 +144,7 @@ impl Context {
             })
             .map_err(|source| {
                 unsafe { self.device.destroy_buffer(raw, None) };
-                Error::Allocation { name: name.to_string(), source }
+                Error::Allocation { name: name.to_string(), bytes: requirements.size, source }
             })?;
         let buffer = Buffer { raw, size, allocation };
         // SAFETY: the allocation was made for this buffer's requirements.
@@ -184,6 +191,30 @@ impl Context {
                 extent.width, extent.height
             )));
         }
+        // Images too large for the device are refused with their size, before Vulkan is asked.
+        // SAFETY: a query on the context's own physical device.
+        let limits = unsafe {
+            self.instance.get_physical_device_image_format_properties(
+                self.physical_device,
+                format,
+                vk::ImageType::TYPE_2D,
+                vk::ImageTiling::OPTIMAL,
+                usage,
+                vk::ImageCreateFlags::empty(),
+            )
+        }
+        .map_err(|e| Error::Invalid(format!("image {name:?}: {format:?} for {usage:?} is not supported here ({e})")))?;
+        let bytes = u64::from(extent.width) * u64::from(extent.height) * u64::from(texel_bytes(format));
+        if bytes >= limits.max_resource_size {
+            return Err(Error::Invalid(format!(
+                "image {name:?} of {}x{} {format:?} would take {:.2} GiB, and this device allows less than {:.2} GiB \
+                 for one image; use a smaller size",
+                extent.width,
+                extent.height,
+                bytes as f64 / GIB,
+                limits.max_resource_size as f64 / GIB
+            )));
+        }
         let info = vk::ImageCreateInfo::default()
             .image_type(vk::ImageType::TYPE_2D)
             .format(format)
@@ -209,7 +240,7 @@ impl Context {
             })
             .map_err(|source| {
                 unsafe { self.device.destroy_image(raw, None) };
-                Error::Allocation { name: name.to_string(), source }
+                Error::Allocation { name: name.to_string(), bytes: requirements.size, source }
             })?;
         // Destroyed on every early return below; the view is null until it is made.
         let mut image = self.guard(Image { raw, view: vk::ImageView::null(), format, extent, allocation });
