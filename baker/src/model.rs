@@ -135,10 +135,13 @@ impl Model {
     pub fn save(&self, path: &Path) -> Result<(), ModelError> {
         let fail = |problem: String| ModelError { file: path.to_path_buf(), problem };
         let bytes = self.to_bytes().map_err(fail)?;
-        // Write beside, then rename: an interrupted save never leaves a broken model.
+        // Write beside, then rename: an interrupted or failed save (a full disk) never leaves a
+        // broken model, and leaves the model that was there before untouched.
         let temporary = path.with_extension("safetensors.partial");
-        std::fs::write(&temporary, bytes).map_err(|e| fail(format!("cannot write: {e}")))?;
-        std::fs::rename(&temporary, path).map_err(|e| fail(format!("cannot write: {e}")))
+        std::fs::write(&temporary, bytes).and_then(|()| std::fs::rename(&temporary, path)).map_err(|e| {
+            let _ = std::fs::remove_file(&temporary);
+            fail(format!("cannot write: {e}"))
+        })
     }
 
     /// Loads and checks a model; with `scene`, also that it was baked from that scene.

@@ -524,7 +524,7 @@ fn material_values_out_of_range() {
         (
             "huge-emission",
             json!({ "name": "M", "emissiveFactor": [1.0, 1.0, 1.0],
-            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 1e39 } } }),
+            "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 1e10 } } }),
             "emissi",
         ),
         ("negative-emission", json!({ "name": "M", "emissiveFactor": [1.0, -1.0, 1.0] }), "emissiveFactor"),
@@ -646,4 +646,19 @@ fn sidecar_box_far_from_the_origin() {
         message.contains("scene.toml") && message.contains("camera") && message.contains("from the origin"),
         "{message}"
     );
+}
+
+#[test]
+fn point_light_too_bright_to_sum() {
+    let dir = scratch("bright-light");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    gltf["extensions"] = json!({ "KHR_lights_punctual": { "lights": [{ "type": "point", "intensity": 1e38 }] } });
+    gltf["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "name": "Sun", "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
+    gltf["scenes"][0]["nodes"] = json!([0, 1]);
+    let message = load_err(&write_scene(&dir, &gltf, &bin));
+    assert!(message.contains("nodes[1] \"Sun\"") && message.contains("intensity"), "{message}");
 }

@@ -19,9 +19,9 @@ use super::texture::{ColorSpace, Texture};
 use super::{LightKind, Material, MovingLight, Object, Part, PointLight, Scene, View, MAX_COORDINATE};
 use crate::hash::Fnv64;
 
-/// Largest `KHR_materials_emissive_strength`: far above the sun's disc, far below where
-/// sums of radiance overflow f32.
-const MAX_EMISSIVE_STRENGTH: f32 = 1e9;
+/// Largest `KHR_materials_emissive_strength` and point-light intensity: far above the sun's
+/// disc, far below where sums of radiance overflow f32.
+const MAX_EMISSION: f32 = 1e9;
 
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] =
@@ -150,10 +150,12 @@ pub(super) fn import(
             match light.kind() {
                 gltf::khr_lights_punctual::Kind::Point => {
                     let intensity = Vec3::from(light.color()) * light.intensity();
-                    if !(intensity.is_finite() && intensity.min_element() >= 0.0) {
+                    if !(intensity.min_element() >= 0.0 && intensity.max_element() <= MAX_EMISSION) {
                         return Err(err(
                             &element,
-                            format!("point light intensity {intensity} must be finite and not negative"),
+                            format!(
+                                "point light colour × intensity {intensity} must lie between 0 and {MAX_EMISSION:e}"
+                            ),
                         ));
                     }
                     point_lights.push(PointLight {
@@ -360,7 +362,7 @@ impl Importer<'_> {
             ("metallicFactor", unit(pbr.metallic_factor())),
             ("roughnessFactor", unit(pbr.roughness_factor())),
             ("emissiveFactor", m.emissive_factor().into_iter().all(unit)),
-            ("emissiveStrength", m.emissive_strength().is_none_or(|s| (0.0..=MAX_EMISSIVE_STRENGTH).contains(&s))),
+            ("emissiveStrength", m.emissive_strength().is_none_or(|s| (0.0..=MAX_EMISSION).contains(&s))),
             ("specularFactor", m.specular().is_none_or(|s| unit(s.specular_factor()))),
         ];
         if let Some((key, _)) = checks.iter().find(|(_, ok)| !ok) {
@@ -373,7 +375,7 @@ impl Importer<'_> {
                 _ => format!("{:?}", m.specular().map(|s| s.specular_factor())),
             };
             let range = match *key {
-                "emissiveStrength" => format!("between 0 and {MAX_EMISSIVE_STRENGTH:e}"),
+                "emissiveStrength" => format!("between 0 and {MAX_EMISSION:e}"),
                 _ => "between 0 and 1".into(),
             };
             return Err(SceneError::new(self.file, element, format!("{key} {value} must be {range}")));
