@@ -662,3 +662,19 @@ fn point_light_too_bright_to_sum() {
     let message = load_err(&write_scene(&dir, &gltf, &bin));
     assert!(message.contains("nodes[1] \"Sun\"") && message.contains("intensity"), "{message}");
 }
+
+#[test]
+fn a_scene_without_a_camera_gets_a_view_of_everything() {
+    let dir = scratch("no-camera");
+    let (gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    let scene = Scene::load(&write_scene(&dir, &gltf, &bin)).unwrap();
+    let view = &scene.views[0];
+    assert_eq!(view.name, "default");
+    assert!(scene.warnings.iter().any(|w| w.contains("no camera")), "{:?}", scene.warnings);
+    // The triangle lies in front of the eye, inside the field of view.
+    let forward = (view.target - view.eye).normalize();
+    for p in TRIANGLE.map(Vec3::from) {
+        let angle = forward.angle_between(p - view.eye).to_degrees();
+        assert!(angle < view.fov_y / 2.0, "{p} is {angle}° off the view axis");
+    }
+}

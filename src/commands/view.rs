@@ -47,7 +47,7 @@ pub struct ViewArgs {
     #[arg(long)]
     pub view: Option<String>,
     /// Where the moving light starts, x,y,z in metres; default: where the glTF puts it.
-    #[arg(long, value_name = "X,Y,Z")]
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub light: Option<String>,
     /// Window size (or frame size when headless) in pixels.
     #[arg(long, default_value = "960x540", value_name = "WxH")]

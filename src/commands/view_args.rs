@@ -17,10 +17,10 @@ pub struct ViewArgs {
     pub view: Option<String>,
     /// Camera as EYE:TARGET, each x,y,z in metres, e.g. 0.28,0.27,-0.8:0.28,0.27,0; the
     /// field of view is the default view's.
-    #[arg(long, value_name = "EYE:TARGET")]
+    #[arg(long, value_name = "EYE:TARGET", allow_hyphen_values = true)]
     pub camera: Option<String>,
     /// Position of the scene's moving light, x,y,z in metres; default: where the glTF puts it.
-    #[arg(long, value_name = "X,Y,Z")]
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub light: Option<String>,
     /// Image size in pixels.
     #[arg(long, default_value = "256x256", value_name = "WxH")]
@@ -56,9 +56,7 @@ impl Component {
 /// The scene's view called `name`, or its default view (the glTF camera) for `None`.
 pub fn named_view(scene: &Scene, name: Option<&str>) -> Result<View> {
     let Some(name) = name else {
-        return scene.views.first().cloned().with_context(|| {
-            format!("{}: the scene has no camera and no named views; use --camera", scene.gltf_path.display())
-        });
+        return Ok(scene.views[0].clone());
     };
     scene.view(name).cloned().with_context(|| {
         let names = scene.views.iter().map(|v| v.name.as_str()).collect::<Vec<_>>().join(", ");

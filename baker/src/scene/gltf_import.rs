@@ -189,6 +189,14 @@ pub(super) fn import(
             "has no triangles to render (only meshes of TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN are drawn)".into(),
         ));
     }
+    if views.is_empty() {
+        let bounds = objects.iter().flat_map(|o| &o.positions).fold(
+            Aabb { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY },
+            |b, &p| Aabb { min: b.min.min(p), max: b.max.max(p) },
+        );
+        views.push(framing_view(&bounds));
+        importer.warnings.push("the glTF has no camera: the default view looks at the whole scene along -z".into());
+    }
     if skipped_primitives > 0 {
         importer
             .warnings
@@ -319,6 +327,16 @@ fn camera_view(world: &Mat4, yfov: f32) -> Result<View, String> {
         return Err("the camera's transform leaves it no viewing direction (a zero or degenerate scale)".into());
     }
     Ok(View { name: "default".into(), eye, target: eye + forward, up, fov_y: yfov.to_degrees() })
+}
+
+/// The default view of a glTF without a camera: from the +z side, far enough back that the
+/// bounding sphere of `bounds` fits in a 45° field of view.
+fn framing_view(bounds: &Aabb) -> View {
+    const FOV_Y: f32 = 45.0;
+    let centre = (bounds.min + bounds.max) * 0.5;
+    let radius = ((bounds.max - bounds.min).length() * 0.5).max(1e-3);
+    let distance = radius / (FOV_Y.to_radians() * 0.5).sin();
+    View { name: "default".into(), eye: centre + Vec3::Z * distance, target: centre, up: Vec3::Y, fov_y: FOV_Y }
 }
 
 /// Total area of an object's emissive triangles.

@@ -41,7 +41,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub point_lights: Vec<PointLight>,
-    /// The glTF camera first (named `default`), then the sidecar's views.
+    /// The default view first (the glTF camera, or one that frames the whole scene when the
+    /// glTF has none), then the sidecar's views: never empty.
     pub views: Vec<View>,
     /// The moving light and its box; `None` without a sidecar `[light]`.
     pub moving_light: Option<MovingLight>,
