@@ -197,3 +197,17 @@ fn shipped_models_load() {
         }
     }
 }
+
+#[test]
+fn a_bake_that_would_train_nothing_fails_and_says_why() {
+    // The camera box behind the Cornell box's back wall: every ray meets the back of a
+    // one-sided wall.
+    let mut scene = scene("cornell-box");
+    scene.camera_box = Some(rrf_baker::scene::Aabb {
+        min: rrf_baker::glam::Vec3::new(0.2, 0.2, 0.7),
+        max: rrf_baker::glam::Vec3::new(0.3, 0.3, 0.8),
+    });
+    let settings = BakeSettings::new(Quality::Test, 1, &scene);
+    let message = bake(&scene, &settings, &scratch("behind-wall"), &Quiet).unwrap_err().to_string();
+    assert!(message.contains("no network") && message.contains("camera box"), "{message}");
+}

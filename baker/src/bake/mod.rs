@@ -151,6 +151,8 @@ pub enum BakeError {
         model.display(), lock.display()
     )]
     Locked { model: PathBuf, lock: PathBuf, pid: u32 },
+    #[error("{}: the bake would train no network: {cause}", scene.display())]
+    NoNetworks { scene: PathBuf, cause: String },
     #[error(
         "{}: {configurations} configurations × {rays} rays could make {:.1} GiB of samples, more than the {} GiB a bake may hold; lower them in the sidecar's [bake] section",
         scene.display(), *bytes as f64 / GIB, MAX_SAMPLE_BYTES / (1 << 30)
@@ -305,6 +307,27 @@ pub fn bake(
         for component in Component::ALL {
             jobs.push((object.id, component));
         }
+    }
+    if jobs.is_empty() {
+        let cause = if all.is_empty() {
+            "no ray from the camera box reached the front of a surface: is the camera box inside the scene, \
+             not behind a wall or outside a closed room?"
+                .to_string()
+        } else if scene
+            .objects
+            .iter()
+            .all(|o| o.parts.iter().all(|p| scene.materials[p.material as usize].is_emissive()))
+        {
+            "every object is an emitter, and emitters get no network".to_string()
+        } else {
+            format!(
+                "{} samples in all, but no object had the {} a network needs: the camera box sees too little of the \
+                 scene, or the bake preset is too small",
+                all.len(),
+                settings.min_samples
+            )
+        };
+        return Err(BakeError::NoNetworks { scene: scene.gltf_path.clone(), cause });
     }
     let trained = std::sync::atomic::AtomicU64::new(0);
     let resumed_networks = std::sync::atomic::AtomicUsize::new(0);
