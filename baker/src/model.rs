@@ -7,8 +7,7 @@
 //! transform, training statistics, the bake settings, and a checksum of the tensor data.
 //! Nothing in the file depends on when or how fast it was baked (no timings, no dates), so
 //! the same scene, settings and seed give the same bytes: an interrupted and resumed bake is
-//! byte-identical to an uninterrupted one. (Models of rrf 0.1 also recorded per-network
-//! training seconds; the field is ignored when read.)
+//! byte-identical to an uninterrupted one.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -21,7 +20,9 @@ use crate::hash::Fnv64;
 use crate::network::{Component, Network, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
 use crate::scene::Scene;
 
-pub const FORMAT_VERSION: u32 = 1;
+/// Version 2: the scene hash covers only what shapes the samples (not the views), and no
+/// timings are recorded. Version 1 models are refused with a message to re-bake.
+pub const FORMAT_VERSION: u32 = 2;
 
 /// The names of the 13 inputs, in order.
 pub const INPUT_NAMES: [&str; INPUTS] = [

@@ -148,7 +148,7 @@ fn model_round_trips_and_refuses_bad_files() {
     let message = error(&write("flipped.safetensors", &flipped), None);
     assert!(message.contains("checksum"), "{message}");
 
-    let needle = b"format_version\\\":1";
+    let needle = b"format_version\\\":2";
     let at = bytes.windows(needle.len()).position(|w| w == needle).expect("the metadata holds the version");
     let mut versioned = bytes.clone();
     versioned[at + needle.len() - 1] = b'7';
@@ -210,4 +210,13 @@ fn a_bake_that_would_train_nothing_fails_and_says_why() {
     let settings = BakeSettings::new(Quality::Test, 1, &scene);
     let message = bake(&scene, &settings, &scratch("behind-wall"), &Quiet).unwrap_err().to_string();
     assert!(message.contains("no network") && message.contains("camera box"), "{message}");
+}
+
+#[test]
+fn a_bake_without_boxes_says_which_file_to_write_and_what() {
+    let mut scene = scene("cornell-box");
+    scene.moving_light = None;
+    let settings = BakeSettings::new(Quality::Test, 1, &scene);
+    let message = bake(&scene, &settings, &scratch("no-boxes"), &Quiet).unwrap_err().to_string();
+    assert!(message.contains("cornell-box/scene.toml") && message.contains("[light]\nnode = "), "{message}");
 }

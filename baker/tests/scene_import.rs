@@ -678,3 +678,37 @@ fn a_scene_without_a_camera_gets_a_view_of_everything() {
         assert!(angle < view.fov_y / 2.0, "{p} is {angle}° off the view axis");
     }
 }
+
+#[test]
+fn the_scene_hash_covers_what_shapes_the_samples_and_not_the_views() {
+    let sidecar = std::fs::read_to_string(repo().join("scenes/cornell-box/scene.toml")).unwrap();
+    let hash = |test: &str, sidecar: &str| Scene::load(&cornell_with_sidecar(test, sidecar)).unwrap().content_hash;
+    let original = hash("hash-original", &sidecar);
+    let with_view = format!("{sidecar}\n[views.extra]\neye = [0.1, 0.2, -0.5]\ntarget = [0.3, 0.3, 0.3]\nfov_y = 50\n");
+    assert_eq!(hash("hash-view", &with_view), original, "a new view needs no re-bake");
+    let wider_camera = sidecar.replace("max = [0.50, 0.50, 0.05]", "max = [0.51, 0.50, 0.05]");
+    assert_ne!(wider_camera, sidecar, "the test must change the sidecar");
+    assert_ne!(hash("hash-camera", &wider_camera), original, "the camera box shapes the samples");
+    let more_configurations = format!("{sidecar}\n[bake.test]\nconfigurations = 17\n");
+    assert_ne!(hash("hash-bake", &more_configurations), original);
+}
+
+#[test]
+fn a_sidecar_under_another_name_is_named_not_silently_ignored() {
+    let dir = cornell_with_sidecar(
+        "other-name",
+        &std::fs::read_to_string(repo().join("scenes/cornell-box/scene.toml")).unwrap(),
+    );
+    std::fs::rename(dir.join("scene.gltf"), dir.join("MyScene.gltf")).unwrap();
+    let scene = Scene::load(&dir.join("MyScene.gltf")).unwrap();
+    assert!(scene.moving_light.is_none());
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("scene.toml is not read") && w.contains("MyScene.toml")),
+        "{:?}",
+        scene.warnings
+    );
+    assert_eq!(scene.sidecar_file(), dir.join("MyScene.toml"));
+    std::fs::rename(dir.join("scene.toml"), dir.join("MyScene.toml")).unwrap();
+    let scene = Scene::load(&dir.join("MyScene.gltf")).unwrap();
+    assert!(scene.moving_light.is_some() && scene.warnings.is_empty(), "{:?}", scene.warnings);
+}

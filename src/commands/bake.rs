@@ -24,7 +24,7 @@ pub enum QualityArg {
 
 #[derive(Args, Debug)]
 pub struct BakeArgs {
-    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    #[arg(help = super::SCENE_HELP)]
     pub scene: PathBuf,
     /// Preset for the number of configurations, samples, paths and iterations; the scene's
     /// sidecar may override it ([bake.test], [bake.preview], [bake.final]).

@@ -56,7 +56,7 @@ fn parse_variants(s: &str) -> Result<Variants, String> {
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    #[arg(help = super::SCENE_HELP)]
     pub scene: PathBuf,
     /// Model file; default: model.safetensors in the scene's folder.
     #[arg(long)]

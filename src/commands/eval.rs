@@ -29,7 +29,7 @@ const RR_DEPTH: u32 = 5;
 
 #[derive(Args, Debug)]
 pub struct EvalArgs {
-    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    #[arg(help = super::SCENE_HELP)]
     pub scene: PathBuf,
     /// Model file; default: model.safetensors in the scene's folder.
     #[arg(long)]

@@ -9,3 +9,8 @@ pub mod render;
 pub mod variant;
 pub mod view;
 pub mod view_args;
+
+/// What every command's SCENE argument accepts, and where the sidecar is looked for.
+pub const SCENE_HELP: &str = "Scene: a folder holding scene.gltf or scene.glb, or a .gltf or .glb file. \
+Its sidecar (light and camera boxes, views, bake settings) is the glTF's name with .toml: scene.toml, or \
+MyScene.toml beside MyScene.glb";

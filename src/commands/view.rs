@@ -38,7 +38,7 @@ impl PresentMode {
 #[derive(Args, Debug)]
 #[command(after_long_help = CONTROLS)]
 pub struct ViewArgs {
-    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    #[arg(help = super::SCENE_HELP)]
     pub scene: PathBuf,
     /// Model file; default: model.safetensors in the scene's folder.
     #[arg(long)]

@@ -10,7 +10,7 @@ use rrf_baker::trace::Radiance;
 
 #[derive(Args, Clone, Debug)]
 pub struct ViewArgs {
-    /// Scene folder (holding scene.gltf or scene.glb, and scene.toml) or a glTF file.
+    #[arg(help = super::SCENE_HELP)]
     pub scene: PathBuf,
     /// A named view from the scene (see `rrf info SCENE`); default: the glTF camera.
     #[arg(long, conflicts_with = "camera")]

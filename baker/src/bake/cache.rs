@@ -19,19 +19,13 @@ pub enum Cached {
 
 const HEADER: usize = 24;
 
-fn checksum(payload: &[u8]) -> u64 {
-    let mut hash = Fnv64::default();
-    hash.write(payload);
-    hash.0
-}
-
 pub fn read(path: &Path, magic: &[u8; 8], key: u64) -> Cached {
     let Ok(bytes) = std::fs::read(path) else { return Cached::Missing };
     if bytes.len() < HEADER || &bytes[..8] != magic || bytes[8..16] != key.to_le_bytes() {
         return Cached::Missing;
     }
     let payload = &bytes[HEADER..];
-    if bytes[16..24] != checksum(payload).to_le_bytes() {
+    if bytes[16..24] != Fnv64::of(payload).to_le_bytes() {
         return Cached::Corrupt;
     }
     Cached::Found(payload.to_vec())
@@ -41,7 +35,7 @@ pub fn write(path: &Path, magic: &[u8; 8], key: u64, payload: &[u8]) -> Result<(
     let mut bytes = Vec::with_capacity(HEADER + payload.len());
     bytes.extend(magic);
     bytes.extend(key.to_le_bytes());
-    bytes.extend(checksum(payload).to_le_bytes());
+    bytes.extend(Fnv64::of(payload).to_le_bytes());
     bytes.extend(payload);
     let partial = path.with_extension("partial");
     std::fs::write(&partial, bytes).and_then(|()| std::fs::rename(&partial, path)).map_err(|e| BakeError::Io {

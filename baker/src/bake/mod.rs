@@ -141,9 +141,13 @@ pub trait BakeProgress: Sync {
 #[derive(Debug, thiserror::Error)]
 pub enum BakeError {
     #[error(
-        "{scene}: cannot bake without a sidecar [light] and [camera] (the boxes the light and the viewer move in)"
+        "{}: cannot bake without the boxes the light and the viewer move in; write them in {} (README: Scenes), e.g.\n\n\
+         [light]\nnode = \"Lamp\"            # the point light or emissive mesh node that moves\n\
+         min = [-1.0, 2.0, -1.0]   # metres, world space\nmax = [1.0, 2.5, 1.0]\n\n\
+         [camera]\nmin = [-2.0, 1.0, -2.0]\nmax = [2.0, 2.0, 2.0]\n",
+        scene.display(), sidecar.display()
     )]
-    NoDomains { scene: PathBuf },
+    NoDomains { scene: PathBuf, sidecar: PathBuf },
     #[error("{}: {problem}", path.display())]
     Io { path: PathBuf, problem: String },
     #[error(
@@ -201,7 +205,7 @@ pub fn bake(
     progress: &dyn BakeProgress,
 ) -> Result<(Model, BakeReport), BakeError> {
     let (Some(light), Some(camera)) = (&scene.moving_light, &scene.camera_box) else {
-        return Err(BakeError::NoDomains { scene: scene.gltf_path.clone() });
+        return Err(BakeError::NoDomains { scene: scene.gltf_path.clone(), sidecar: scene.sidecar_file() });
     };
     let bytes = u64::from(settings.configurations) * u64::from(settings.rays_per_configuration) * SAMPLE_BYTES as u64;
     if bytes > MAX_SAMPLE_BYTES {

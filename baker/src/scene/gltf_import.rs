@@ -12,12 +12,12 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::buffer::Data as BufferData;
 use gltf::mesh::Mode;
 
+use super::content_hash::content_hash;
 use super::error::SceneError;
 use super::external;
 use super::sidecar::{Aabb, Sidecar};
 use super::texture::{ColorSpace, Texture};
 use super::{LightKind, Material, MovingLight, Object, Part, PointLight, Scene, View, MAX_COORDINATE};
-use crate::hash::Fnv64;
 
 /// Largest `KHR_materials_emissive_strength` and point-light intensity: far above the sun's
 /// disc, far below where sums of radiance overflow f32.
@@ -67,12 +67,6 @@ pub(super) fn import(
         (Some(p), Some(text)) => Sidecar::parse(p, text)?,
         _ => Sidecar::default(),
     };
-
-    let mut hash = Fnv64::default();
-    hash.write(bytes);
-    buffers.iter().for_each(|b| hash.write(&b.0));
-    images.iter().for_each(|i| hash.write(&i.pixels));
-    hash.write(sidecar_text.as_deref().unwrap_or_default().as_bytes());
 
     let mut importer = Importer {
         file,
@@ -263,7 +257,7 @@ pub(super) fn import(
         }
     };
 
-    Ok(Scene {
+    let mut scene = Scene {
         name,
         gltf_path: file.to_path_buf(),
         sidecar_path: sidecar_path.map(Path::to_path_buf),
@@ -276,8 +270,10 @@ pub(super) fn import(
         camera_box: sidecar.camera.as_ref().map(|c| Aabb { min: c.min.into(), max: c.max.into() }),
         bake: sidecar.bake,
         warnings: importer.warnings,
-        content_hash: hash.0,
-    })
+        content_hash: 0,
+    };
+    scene.content_hash = content_hash(&scene);
+    Ok(scene)
 }
 
 /// What the `gltf` crate (1.4) panics on instead of reporting, found by fuzzing: a POSITION

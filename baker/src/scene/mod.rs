@@ -9,6 +9,7 @@
 //! scene's nodes, and named by their node: per-object networks are keyed by that name, so
 //! names must be unique.
 
+mod content_hash;
 mod error;
 mod external;
 mod gltf_import;
@@ -51,8 +52,8 @@ pub struct Scene {
     pub bake: BakePresets,
     /// Things that were skipped or approximated while importing, for the user to see.
     pub warnings: Vec<String>,
-    /// FNV-1a 64 over the glTF, its buffers and images, and the sidecar: a model file records
-    /// it so that a model cannot be used with another scene.
+    /// FNV-1a 64 over what shapes the training samples (not the views): a model file records
+    /// it so that a model cannot be used with another scene. See `content_hash.rs`.
     pub content_hash: u64,
 }
 
@@ -141,13 +142,29 @@ pub enum LightKind {
 }
 
 impl Scene {
-    /// Loads a scene folder (holding `scene.gltf` or `scene.glb`, and `scene.toml`) or a
-    /// glTF file (with an optional sidecar of the same stem and extension `.toml`).
+    /// Loads a scene folder (holding `scene.gltf` or `scene.glb`) or a glTF file. The sidecar
+    /// is always the glTF's path with the extension `.toml` ([`Scene::sidecar_file`]).
     pub fn load(path: &Path) -> Result<Self, SceneError> {
-        let (gltf_path, sidecar_path, name) = locate(path)?;
+        let (gltf_path, name) = locate(path)?;
         let bytes =
             std::fs::read(&gltf_path).map_err(|e| SceneError::new(&gltf_path, "", format!("cannot read: {e}")))?;
-        gltf_import::import(&gltf_path, &bytes, sidecar_path.as_deref(), name)
+        let sidecar = gltf_path.with_extension("toml");
+        let mut scene = gltf_import::import(&gltf_path, &bytes, sidecar.is_file().then_some(&sidecar), name)?;
+        let beside = gltf_path.with_file_name("scene.toml");
+        if !sidecar.is_file() && beside.is_file() {
+            scene.warnings.push(format!(
+                "{} is not read: the sidecar of {} is {}",
+                beside.display(),
+                gltf_path.display(),
+                sidecar.display()
+            ));
+        }
+        Ok(scene)
+    }
+
+    /// Where this scene's sidecar is, or would be: the glTF's path with the extension `.toml`.
+    pub fn sidecar_file(&self) -> PathBuf {
+        self.gltf_path.with_extension("toml")
     }
 
     /// Imports glTF or GLB `bytes` as if read from `file`, without a sidecar: external buffers
@@ -185,18 +202,17 @@ impl Scene {
     }
 }
 
-fn locate(path: &Path) -> Result<(PathBuf, Option<PathBuf>, String), SceneError> {
+/// The glTF file of `path` and the scene's name.
+fn locate(path: &Path) -> Result<(PathBuf, String), SceneError> {
     if path.is_dir() {
         let gltf = GLTF_NAMES.iter().map(|n| path.join(n)).find(|p| p.is_file()).ok_or_else(|| {
             SceneError::new(path, "", format!("no scene here: expected {} or {}", GLTF_NAMES[0], GLTF_NAMES[1]))
         })?;
-        let sidecar = path.join("scene.toml");
         let name = path.canonicalize().ok().and_then(|p| p.file_name().map(|n| n.to_string_lossy().into_owned()));
-        Ok((gltf, sidecar.is_file().then_some(sidecar), name.unwrap_or_else(|| "scene".into())))
+        Ok((gltf, name.unwrap_or_else(|| "scene".into())))
     } else if path.is_file() {
-        let sidecar = path.with_extension("toml");
         let name = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        Ok((path.to_path_buf(), sidecar.is_file().then_some(sidecar), name))
+        Ok((path.to_path_buf(), name))
     } else {
         Err(SceneError::new(path, "", "no such file or folder"))
     }

@@ -107,7 +107,7 @@ impl BakeOverrides {
         ("max_iterations", 1, 100_000),
     ];
 
-    fn values(&self) -> [Option<u32>; 5] {
+    pub(super) fn values(&self) -> [Option<u32>; 5] {
         [self.configurations, self.rays_per_configuration, self.paths_per_sample, self.max_depth, self.max_iterations]
     }
 }

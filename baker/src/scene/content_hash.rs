@@ -1,0 +1,92 @@
+//! The scene's content hash, which a model records so that it is used only with the scene it
+//! was baked from. It covers what shapes the training samples: the objects (names and
+//! geometry), materials and their textures, the point lights, the moving light and its box,
+//! the camera box and the bake presets. It leaves out the views, so adding a named view or
+//! moving the glTF camera does not call for a re-bake; nor does anything glTF carries that
+//! rrf does not read.
+
+use glam::Vec3;
+
+use super::{LightKind, Scene};
+use crate::hash::Fnv64;
+
+struct Writer(Fnv64);
+
+impl Writer {
+    fn bytes(&mut self, b: &[u8]) {
+        self.u64(b.len() as u64);
+        self.0.write(b);
+    }
+
+    fn u64(&mut self, v: u64) {
+        self.0.write(&v.to_le_bytes());
+    }
+
+    fn f32s(&mut self, values: impl IntoIterator<Item = f32>) {
+        for v in values {
+            self.0.write(&v.to_le_bytes());
+        }
+    }
+
+    fn vec3s<'a>(&mut self, values: impl IntoIterator<Item = &'a Vec3>) {
+        self.f32s(values.into_iter().flat_map(|v| v.to_array()));
+    }
+}
+
+pub(super) fn content_hash(scene: &Scene) -> u64 {
+    let mut w = Writer(Fnv64::default());
+    w.u64(scene.objects.len() as u64);
+    for o in &scene.objects {
+        w.bytes(o.name.as_bytes());
+        w.vec3s(&o.positions);
+        w.vec3s(&o.normals);
+        w.f32s(o.uvs.iter().flat_map(|v| v.to_array()));
+        w.u64(o.triangles.len() as u64);
+        o.triangles.iter().flatten().for_each(|&i| w.u64(u64::from(i)));
+        for part in &o.parts {
+            for v in [part.material, part.triangles.start, part.triangles.end] {
+                w.u64(u64::from(v));
+            }
+        }
+    }
+    w.u64(scene.materials.len() as u64);
+    for m in &scene.materials {
+        w.vec3s([&m.base_color, &m.emission]);
+        w.f32s([m.metallic, m.roughness, m.specular, f32::from(u8::from(m.double_sided))]);
+        for texture in [m.base_color_texture, m.metallic_roughness_texture] {
+            w.u64(texture.map_or(u64::MAX, u64::from));
+        }
+    }
+    w.u64(scene.textures.len() as u64);
+    for t in &scene.textures {
+        w.u64(u64::from(t.width));
+        w.u64(u64::from(t.height));
+        w.bytes(format!("{:?}", t.color_space).as_bytes());
+        w.bytes(t.texels.as_flattened());
+    }
+    w.u64(scene.point_lights.len() as u64);
+    for l in &scene.point_lights {
+        w.bytes(l.name.as_bytes());
+        w.vec3s([&l.position, &l.intensity]);
+    }
+    w.u64(u64::from(scene.moving_light.is_some()));
+    if let Some(light) = &scene.moving_light {
+        w.bytes(light.node_name.as_bytes());
+        let (kind, index) = match light.kind {
+            LightKind::Point(i) => (0, i as u64),
+            LightKind::Area(id) => (1, u64::from(id)),
+        };
+        w.u64(kind);
+        w.u64(index);
+        w.vec3s([&light.default_position, &light.bounds.min, &light.bounds.max]);
+    }
+    w.u64(u64::from(scene.camera_box.is_some()));
+    if let Some(camera) = &scene.camera_box {
+        w.vec3s([&camera.min, &camera.max]);
+    }
+    for preset in [&scene.bake.test, &scene.bake.preview, &scene.bake.final_] {
+        let values = preset.as_ref().map_or([None; 5], |p| p.values());
+        values.iter().for_each(|v| w.u64(v.map_or(u64::MAX, u64::from)));
+    }
+    w.0 .0
+}
