@@ -21,8 +21,6 @@ layout(push_constant) uniform Constants {
 
 #include "network.glsl"
 
-#define OBJECT_STRIDE (2 * PARAMETERS + 2 * INPUTS + 3)
-
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, imageSize(out_gi)))) {

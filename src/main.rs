@@ -36,8 +36,9 @@ enum Command {
     /// Bake a scene's radiance regression functions: path-traced training samples, then two
     /// networks (direct and indirect light) per object, trained with Levenberg–Marquardt.
     ///
-    /// Writes a safetensors model. Sampling is saved in shards as it goes: a bake that is
-    /// interrupted resumes where it stopped when started again with the same settings.
+    /// Writes a safetensors model. Samples and trained networks are saved as they are made: a
+    /// bake that is interrupted (Ctrl-C, a kill, a crash) resumes where it stopped when the
+    /// same command is run again, and writes the same model as an uninterrupted bake.
     Bake(rrf::commands::bake::BakeArgs),
     /// Render one frame from a baked model: each pixel's object networks give its direct and
     /// indirect light; emitters show their emission.

@@ -5,20 +5,9 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-pub const INPUTS: usize = 13;
-pub const HIDDEN1: usize = 20;
-pub const HIDDEN2: usize = 10;
-pub const OUTPUTS: usize = 3;
-
-/// Parameter layout, in this order: w1 [HIDDEN1][INPUTS] row-major, b1 [HIDDEN1],
-/// w2 [HIDDEN2][HIDDEN1], b2 [HIDDEN2], w3 [OUTPUTS][HIDDEN2], b3 [OUTPUTS].
-pub const W1: usize = 0;
-pub const B1: usize = W1 + HIDDEN1 * INPUTS;
-pub const W2: usize = B1 + HIDDEN1;
-pub const B2: usize = W2 + HIDDEN2 * HIDDEN1;
-pub const W3: usize = B2 + HIDDEN2;
-pub const B3: usize = W3 + OUTPUTS * HIDDEN2;
-pub const PARAMETERS: usize = B3 + OUTPUTS;
+#[path = "network_layout.rs"]
+mod layout;
+pub use layout::*;
 
 /// Which light a network learns.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]

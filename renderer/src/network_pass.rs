@@ -22,24 +22,13 @@ use crate::guard::Destroy;
 use crate::resources::{Buffer, Image};
 use crate::sync::{Access, Pass, ResourceStates, Use};
 
-pub const INPUTS: usize = 13;
-const HIDDEN1: usize = 20;
-const HIDDEN2: usize = 10;
-const OUTPUTS: usize = 3;
-/// Offsets of the parameter layout (the baker's `network.rs`): w1 [20][13], b1, w2 [10][20],
-/// b2, w3 [3][10], b3.
-const B1: usize = HIDDEN1 * INPUTS;
-const W2: usize = B1 + HIDDEN1;
-const W3: usize = W2 + HIDDEN2 * HIDDEN1 + HIDDEN2;
-const B3: usize = W3 + OUTPUTS * HIDDEN2;
-/// Parameters of one 13 → 20 → 10 → 3 network.
-pub const PARAMETERS: usize = B3 + OUTPUTS;
-/// Floats per object slot of the storage variant: direct and indirect parameters, input
-/// ranges, two output scales, and a presence flag.
-pub const OBJECT_STRIDE: usize = 2 * PARAMETERS + 2 * INPUTS + 3;
-/// Specialization constant id of the first direct parameter in `network_specialized.comp`
-/// (build.rs generates the declarations from the same value).
-const FIRST_PARAMETER_ID: usize = 16;
+/// The network layout, shared with the baker and the shaders (one file, see its header).
+#[allow(dead_code)] // the renderer uses part of it
+mod layout {
+    include!("../../baker/src/network_layout.rs");
+}
+use layout::{B1, FIRST_PARAMETER_ID, HIDDEN1, W3};
+pub use layout::{INPUTS, OBJECT_STRIDE, PARAMETERS};
 /// The most objects `network_classify.comp` tells apart.
 const MAX_OBJECTS: usize = 1024;
 /// Pixels per side of the tiles the classify pass sorts; the workgroup size of both shaders.

@@ -1,19 +1,11 @@
-// Radiance regression function on the GPU: 13 → 20 tanh → 10 tanh → 3, reading the
-// parameters from `weights` at `base`. Follows baker/src/network.rs (`Network::evaluate`,
-// `forward`) line for line; the parameter layout is the same: w1 [20][13], b1 [20],
-// w2 [10][20], b2 [10], w3 [3][10], b3 [3].
+// Radiance regression function on the GPU: INPUTS → HIDDEN1 tanh → HIDDEN2 tanh → 3, reading
+// the parameters from `weights` at `base`. Follows baker/src/network.rs (`Network::evaluate`,
+// `forward`) line for line; the shape and parameter offsets come from
+// baker/src/network_layout.rs (through network_inputs.glsl).
 #ifndef RRF_NETWORK_GLSL
 #define RRF_NETWORK_GLSL
 
 #include "network_inputs.glsl"
-
-#define W1 0
-#define B1 (W1 + HIDDEN1 * INPUTS)
-#define W2 (B1 + HIDDEN1)
-#define B2 (W2 + HIDDEN2 * HIDDEN1)
-#define W3 (B2 + HIDDEN2)
-#define B3 (W3 + 3 * HIDDEN2)
-#define PARAMETERS (B3 + 3)
 
 // Maps x from [lo, hi] to [-1, 1]; a constant input maps to 0.
 float normalize_input(float x, float lo, float hi) {

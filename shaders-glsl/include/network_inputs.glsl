@@ -4,9 +4,8 @@
 #ifndef RRF_NETWORK_INPUTS_GLSL
 #define RRF_NETWORK_INPUTS_GLSL
 
-#define INPUTS 13
-#define HIDDEN1 20
-#define HIDDEN2 10
+// INPUTS, HIDDEN1, HIDDEN2, the parameter offsets: generated from baker/src/network_layout.rs.
+#include "network_layout.glsl"
 
 #include "gbuffer_layout.glsl"
 

@@ -1,0 +1,32 @@
+// The network's shape and parameter layout: the one definition that the baker
+// (`network.rs`), the renderer (`network_pass.rs`, through `include!`) and the shaders
+// (build.rs writes these as `network_layout.glsl`) all use. Plain constants only, so that a
+// build script can include the file.
+
+/// Network inputs: position, direction to the viewer, light position, normal (3 each) and
+/// roughness.
+pub const INPUTS: usize = 13;
+/// Units of the first hidden layer (tanh).
+pub const HIDDEN1: usize = 20;
+/// Units of the second hidden layer (tanh).
+pub const HIDDEN2: usize = 10;
+/// Outputs: linear RGB.
+pub const OUTPUTS: usize = 3;
+
+/// Parameter offsets, in this order: w1 [HIDDEN1][INPUTS] row-major, b1 [HIDDEN1],
+/// w2 [HIDDEN2][HIDDEN1], b2 [HIDDEN2], w3 [OUTPUTS][HIDDEN2], b3 [OUTPUTS].
+pub const W1: usize = 0;
+pub const B1: usize = W1 + HIDDEN1 * INPUTS;
+pub const W2: usize = B1 + HIDDEN1;
+pub const B2: usize = W2 + HIDDEN2 * HIDDEN1;
+pub const W3: usize = B2 + HIDDEN2;
+pub const B3: usize = W3 + OUTPUTS * HIDDEN2;
+/// Parameters of one network.
+pub const PARAMETERS: usize = B3 + OUTPUTS;
+
+/// Floats per object slot of the renderer's storage variant: direct and indirect parameters,
+/// the input ranges (min, then max), two output scales, and a presence flag.
+pub const OBJECT_STRIDE: usize = 2 * PARAMETERS + 2 * INPUTS + 3;
+/// Specialization constant id of the first direct parameter of the renderer's specialized
+/// variant; the indirect network's follow the direct's. Ids below it are the shader's own.
+pub const FIRST_PARAMETER_ID: usize = 16;
