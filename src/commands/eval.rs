@@ -17,7 +17,7 @@ use rrf_renderer::{vk, Context, ContextOptions};
 use super::bake::default_model_path;
 use crate::eval::configs::{held_out, EvalConfig};
 use crate::eval::figure::{compose, Panel};
-use crate::eval::metrics::compare;
+use crate::eval::metrics::{compare, Baselines};
 use crate::eval::reference_cache::{default_cache_dir, reference};
 use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, ConfigReport, Report};
 use crate::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
@@ -129,13 +129,16 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             progress.finish();
             let predicted = predict(&predictor, &scene, &geometry, &model, config, width, height)?;
             let figure = format!("{:02}-{}.png", i, config.name);
-            let metrics = evaluate(&predicted, &truth.pixels, width, height, args.spp, &args.output.join(&figure))?;
+            let (metrics, baselines) =
+                evaluate(&predicted, &truth.pixels, width, height, args.spp, &args.output.join(&figure))?;
             eprintln!(
-                "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4}{}",
+                "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4} (black: FLIP {:.4}, mean colour: FLIP {:.4}){}",
                 config.name,
                 metrics.gi.relmse,
                 metrics.gi.psnr,
                 metrics.gi.flip,
+                baselines.black.flip,
+                baselines.mean_colour.flip,
                 if cached { " (cached reference)" } else { "" }
             );
             let v = &config.view;
@@ -146,6 +149,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                 figure,
                 reference_cached: cached,
                 metrics,
+                baselines,
             })
         })
         .collect();
@@ -160,6 +164,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let configs = evaluated?;
     let all: Vec<ComponentMetrics> = configs.iter().map(|c| c.metrics).collect();
     let mean = ComponentMetrics::mean(&all);
+    let mean_baselines = Baselines::mean(configs.iter().map(|c| &c.baselines));
     let report = Report {
         scene: scene.name.clone(),
         model: model_path.display().to_string(),
@@ -172,11 +177,15 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         seed: args.seed,
         configs,
         mean,
+        mean_baselines,
     };
     report::write(&args.output, &report)?;
     println!("{:<10} {:>10} {:>9} {:>8}", "component", "relMSE", "PSNR dB", "FLIP");
     for (name, m) in [("gi", mean.gi), ("direct", mean.direct), ("indirect", mean.indirect)] {
         println!("{name:<10} {:>10.4} {:>9.2} {:>8.4}", m.relmse, m.psnr, m.flip);
+    }
+    for (name, m) in [("black", mean_baselines.black), ("mean colour", mean_baselines.mean_colour)] {
+        println!("{:<10} {:>10.4} {:>9.2} {:>8.4}  (trivial prediction of gi)", name, m.relmse, m.psnr, m.flip);
     }
     eprintln!("wrote {}", args.output.join("index.html").display());
     Ok(())
@@ -219,7 +228,8 @@ fn predict(
     }
 }
 
-/// Metrics per component, and the configuration's figure written to `figure`.
+/// Metrics per component and the trivial predictions' metrics of the global image, and the
+/// configuration's figure written to `figure`.
 fn evaluate(
     p: &Predicted,
     truth: &[rrf_baker::trace::Radiance],
@@ -227,7 +237,7 @@ fn evaluate(
     height: u32,
     spp: u32,
     figure: &std::path::Path,
-) -> Result<ComponentMetrics> {
+) -> Result<(ComponentMetrics, Baselines)> {
     let pick = |f: fn(&rrf_baker::trace::Radiance) -> Vec3| truth.iter().map(f).collect::<Vec<Vec3>>();
     let (true_direct, true_indirect, true_gi) = (pick(|r| r.direct), pick(|r| r.indirect), pick(|r| r.gi()));
     let gi = compare(&p.gi, &true_gi, width, height);
@@ -246,5 +256,5 @@ fn evaluate(
     compose(&panels, &gi.flip_map, width, height, &footer)
         .save(figure)
         .with_context(|| format!("cannot write {}", figure.display()))?;
-    Ok(metrics)
+    Ok((metrics, Baselines::of(&true_gi, width, height)))
 }

@@ -35,6 +35,32 @@ impl Metrics {
     }
 }
 
+/// The metrics of two trivial predictions of a reference: all black, and every pixel the
+/// reference's mean colour. A model's numbers mean something only well below these.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Baselines {
+    pub black: Metrics,
+    pub mean_colour: Metrics,
+}
+
+impl Baselines {
+    pub fn of(reference: &[Vec3], width: u32, height: u32) -> Baselines {
+        let mean = reference.iter().copied().sum::<Vec3>() / reference.len().max(1) as f32;
+        Baselines {
+            black: compare(&vec![Vec3::ZERO; reference.len()], reference, width, height).metrics,
+            mean_colour: compare(&vec![mean; reference.len()], reference, width, height).metrics,
+        }
+    }
+
+    /// The mean of each baseline over `all`.
+    pub fn mean<'a>(all: impl Iterator<Item = &'a Baselines> + Clone) -> Baselines {
+        Baselines {
+            black: Metrics::mean(all.clone().map(|b| &b.black)),
+            mean_colour: Metrics::mean(all.map(|b| &b.mean_colour)),
+        }
+    }
+}
+
 /// A comparison: the metrics and FLIP's per-pixel error map (0 to 1, rows top to bottom).
 pub struct Comparison {
     pub metrics: Metrics,

@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::{Context as _, Result};
 use serde::Serialize;
 
-use super::metrics::Metrics;
+use super::metrics::{Baselines, Metrics};
 
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct ComponentMetrics {
@@ -45,6 +45,8 @@ pub struct ConfigReport {
     pub figure: String,
     pub reference_cached: bool,
     pub metrics: ComponentMetrics,
+    /// The global image's metrics for trivial predictions of the same reference.
+    pub baselines: Baselines,
 }
 
 #[derive(Debug, Serialize)]
@@ -61,6 +63,7 @@ pub struct Report {
     pub seed: u64,
     pub configs: Vec<ConfigReport>,
     pub mean: ComponentMetrics,
+    pub mean_baselines: Baselines,
 }
 
 pub fn write(dir: &Path, report: &Report) -> Result<()> {
