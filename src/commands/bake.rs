@@ -162,6 +162,7 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             "resumed_networks": report.resumed_networks,
             "corrupt_cache_files": report.corrupt_files,
             "non_finite_dropped": report.non_finite_dropped,
+            "aimed_objects": report.aimed_objects,
             "networks": networks,
             "untrained": model.metadata.untrained,
         });

@@ -13,6 +13,7 @@ pub mod lock;
 pub mod samples;
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -26,7 +27,7 @@ use crate::trace::integrator::non_finite_dropped;
 use crate::trace::sampling::{mix64, Rng};
 use crate::trace::{Geometry, TraceSettings};
 use lm::{initial_parameters, Dataset, LmSettings};
-use samples::{latin_hypercube, sample_configuration, Sample, SAMPLE_BYTES};
+use samples::{latin_hypercube, sample_configuration, sample_object, Sample, SurfacePoints, SAMPLE_BYTES};
 use serde::Deserialize;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -185,6 +186,8 @@ pub struct BakeReport {
     pub corrupt_files: usize,
     /// Path contributions this bake's sampling dropped as non-finite (0 in the shipped scenes).
     pub non_finite_dropped: u64,
+    /// Objects that rays over the sphere rarely hit, which got rays aimed at them.
+    pub aimed_objects: Vec<String>,
 }
 
 const SHARD_MAGIC: &[u8; 8] = b"RRFSHRD2";
@@ -221,64 +224,59 @@ pub fn bake(
     let geometry = Geometry::new(scene);
     let configs = latin_hypercube(settings.configurations as usize, &light.bounds, camera, settings.seed);
 
-    // Sampling, shard by shard.
+    // Sampling, shard by shard: rays over the sphere from every configuration's viewpoint,
+    // then rays aimed at the objects that those rarely hit.
     let start = Instant::now();
     let dropped_before = non_finite_dropped();
-    let corrupt = std::sync::atomic::AtomicUsize::new(0);
+    let corrupt = AtomicUsize::new(0);
     let settings_json = serde_json::to_string(&SamplingKey::from(settings)).expect("settings serialise");
-    let shard_size = settings.shard_configurations.max(1) as usize;
-    let shard_count = configs.len().div_ceil(shard_size);
-    let done = std::sync::atomic::AtomicU64::new(0);
-    let total = configs.len() as u64;
-    let shards: Vec<Result<(Vec<Sample>, bool), BakeError>> = (0..shard_count)
-        .into_par_iter()
-        .map(|shard| {
-            let range = shard * shard_size..((shard + 1) * shard_size).min(configs.len());
-            let mut key = Fnv64::default();
-            key.write(&scene.content_hash.to_le_bytes());
-            key.write(settings_json.as_bytes());
-            key.write(&(shard as u64).to_le_bytes());
-            let path = cache.join(format!("shard-{shard:05}.bin"));
-            let report = |n: usize| {
-                let d = done.fetch_add(n as u64, std::sync::atomic::Ordering::SeqCst) + n as u64;
-                progress.sampled(d, total);
-            };
-            match cache::read(&path, SHARD_MAGIC, key.0) {
-                cache::Cached::Found(bytes) => match samples::decode(&bytes, scene.objects.len()) {
-                    Some(samples) => {
-                        report(range.len());
-                        return Ok((samples, true));
-                    }
-                    None => _ = corrupt.fetch_add(1, std::sync::atomic::Ordering::SeqCst),
-                },
-                cache::Cached::Corrupt => _ = corrupt.fetch_add(1, std::sync::atomic::Ordering::SeqCst),
-                cache::Cached::Missing => {}
-            }
-            let mut samples = Vec::new();
-            for i in range {
-                let seed = mix64(settings.seed ^ mix64(i as u64 + 1));
-                samples.extend(sample_configuration(
-                    scene,
-                    &geometry,
-                    &configs[i],
-                    settings.rays_per_configuration,
-                    settings.paths_per_sample,
-                    &settings.trace(),
-                    seed,
-                ));
-                report(1);
-            }
-            cache::write(&path, SHARD_MAGIC, key.0, &samples::encode(&samples))?;
-            Ok((samples, false))
-        })
+    let mut key = Fnv64::default();
+    key.write(&scene.content_hash.to_le_bytes());
+    key.write(settings_json.as_bytes());
+    let shards = Shards {
+        cache,
+        objects: scene.objects.len(),
+        key: key.0,
+        shard_size: settings.shard_configurations.max(1) as usize,
+        count: configs.len(),
+        corrupt: &corrupt,
+    };
+    let done = AtomicU64::new(0);
+    let sampled = |n: usize| {
+        let d = done.fetch_add(n as u64, Ordering::SeqCst) + n as u64;
+        progress.sampled(d, configs.len() as u64);
+    };
+    let sphere = shards.run("shard", &[], &sampled, |i| {
+        let seed = mix64(settings.seed ^ mix64(i as u64 + 1));
+        let (rays, paths) = (settings.rays_per_configuration, settings.paths_per_sample);
+        sample_configuration(scene, &geometry, &configs[i], rays, paths, &settings.trace(), seed)
+    })?;
+    let mut counts = vec![0usize; scene.objects.len()];
+    sphere.samples.iter().for_each(|s| counts[s.object as usize] += 1);
+    let aimed: Vec<SurfacePoints> = scene
+        .objects
+        .iter()
+        .filter(|o| learns(scene, o.id) && counts[o.id as usize] < AIM_BELOW * settings.min_samples)
+        .map(|o| SurfacePoints::new(scene, o.id))
         .collect();
-    let mut all = Vec::new();
-    let mut resumed_shards = 0;
-    for shard in shards {
-        let (samples, resumed) = shard?;
-        resumed_shards += usize::from(resumed);
-        all.extend(samples);
-    }
+    let aimed_rays = (AIMED_RAYS * settings.min_samples).div_ceil(configs.len()) as u32;
+    let aimed_key: Vec<u8> = aimed.iter().flat_map(|t| t.object().to_le_bytes()).collect();
+    let extra = match aimed.is_empty() {
+        true => Sampled::default(),
+        false => shards.run("aimed", &aimed_key, &|_| {}, |i| {
+            let seed = mix64(settings.seed ^ mix64(i as u64 + 1) ^ AIMED_STREAM);
+            let (rays, paths) = (aimed_rays, settings.paths_per_sample);
+            let sample = |t: &SurfacePoints| {
+                let seed = mix64(seed ^ u64::from(t.object()));
+                sample_object(scene, &geometry, &configs[i], t, rays, paths, &settings.trace(), seed)
+            };
+            aimed.iter().flat_map(sample).collect()
+        })?,
+    };
+    let resumed_shards = sphere.resumed + extra.resumed;
+    let shard_count = sphere.shards + extra.shards;
+    let aimed_objects: Vec<String> = aimed.iter().map(|t| scene.objects[t.object() as usize].name.clone()).collect();
+    let all: Vec<Sample> = sphere.samples.into_iter().chain(extra.samples).collect();
     let sample_seconds = start.elapsed().as_secs_f64();
     let non_finite_dropped = non_finite_dropped() - dropped_before;
 
@@ -291,8 +289,7 @@ pub fn bake(
     let mut untrained = Vec::new();
     let mut jobs = Vec::new();
     for object in &scene.objects {
-        let emissive = object.parts.iter().all(|p| scene.materials[p.material as usize].is_emissive());
-        if emissive {
+        if !learns(scene, object.id) {
             continue; // emitters show their emission; no network
         }
         let samples = &by_object[object.id as usize];
@@ -301,7 +298,8 @@ pub fn bake(
                 object: object.name.clone(),
                 samples: samples.len(),
                 reason: format!(
-                    "{} samples, fewer than the {} needed; the object was rarely seen from the camera box",
+                    "{} samples, fewer than the {} needed, even with rays aimed at it: the object is hardly \
+                     visible from the camera box",
                     samples.len(),
                     settings.min_samples
                 ),
@@ -317,11 +315,7 @@ pub fn bake(
             "no ray from the camera box reached the front of a surface: is the camera box inside the scene, \
              not behind a wall or outside a closed room?"
                 .to_string()
-        } else if scene
-            .objects
-            .iter()
-            .all(|o| o.parts.iter().all(|p| scene.materials[p.material as usize].is_emissive()))
-        {
+        } else if !scene.objects.iter().any(|o| learns(scene, o.id)) {
             "every object is an emitter, and emitters get no network".to_string()
         } else {
             format!(
@@ -412,8 +406,87 @@ pub fn bake(
         resumed_networks: resumed_networks.into_inner(),
         corrupt_files: corrupt.into_inner(),
         non_finite_dropped,
+        aimed_objects,
     };
     Ok((model, report))
+}
+
+/// Objects that got fewer samples than this many times `min_samples` from rays over the sphere
+/// get rays aimed at them.
+const AIM_BELOW: usize = 4;
+/// Rays aimed at each such object, in all configurations together, in units of `min_samples`.
+const AIMED_RAYS: usize = 16;
+/// Separates the random streams of aimed rays from those of rays over the sphere.
+const AIMED_STREAM: u64 = 0xa1e5_0000_0000_0001;
+
+/// Whether `object` gets networks: every object but pure emitters, which show their emission.
+fn learns(scene: &Scene, object: u32) -> bool {
+    scene.objects[object as usize].parts.iter().any(|p| !scene.materials[p.material as usize].is_emissive())
+}
+
+/// The samples of one sampling pass, and how many of its shards came from the cache.
+#[derive(Default)]
+struct Sampled {
+    samples: Vec<Sample>,
+    resumed: usize,
+    shards: usize,
+}
+
+/// A bake's sampling passes: each runs over every configuration, in shards of a few, each
+/// shard a cache file keyed by the scene, the sampling settings and the pass.
+struct Shards<'a> {
+    cache: &'a Path,
+    objects: usize,
+    key: u64,
+    shard_size: usize,
+    count: usize,
+    corrupt: &'a AtomicUsize,
+}
+
+impl Shards<'_> {
+    /// Runs `sample` on every configuration, in shards named `NAME-00000.bin` (`pass` tells
+    /// passes of the same name apart in their key), reading finished shards back from the
+    /// cache; `done(n)` after every `n` configurations.
+    fn run(
+        &self,
+        name: &str,
+        pass: &[u8],
+        done: &(dyn Fn(usize) + Sync),
+        sample: impl Fn(usize) -> Vec<Sample> + Sync,
+    ) -> Result<Sampled, BakeError> {
+        let shard_count = self.count.div_ceil(self.shard_size);
+        let shards: Vec<(Vec<Sample>, bool)> = (0..shard_count)
+            .into_par_iter()
+            .map(|shard| {
+                let range = shard * self.shard_size..((shard + 1) * self.shard_size).min(self.count);
+                let mut key = Fnv64(self.key);
+                key.write(name.as_bytes());
+                key.write(pass);
+                key.write(&(shard as u64).to_le_bytes());
+                let path = self.cache.join(format!("{name}-{shard:05}.bin"));
+                match cache::read(&path, SHARD_MAGIC, key.0) {
+                    cache::Cached::Found(bytes) => match samples::decode(&bytes, self.objects) {
+                        Some(samples) => {
+                            done(range.len());
+                            return Ok((samples, true));
+                        }
+                        None => _ = self.corrupt.fetch_add(1, Ordering::SeqCst),
+                    },
+                    cache::Cached::Corrupt => _ = self.corrupt.fetch_add(1, Ordering::SeqCst),
+                    cache::Cached::Missing => {}
+                }
+                let mut samples = Vec::new();
+                for i in range {
+                    samples.extend(sample(i));
+                    done(1);
+                }
+                cache::write(&path, SHARD_MAGIC, key.0, &samples::encode(&samples))?;
+                Ok((samples, false))
+            })
+            .collect::<Result<_, BakeError>>()?;
+        let resumed = shards.iter().filter(|(_, resumed)| *resumed).count();
+        Ok(Sampled { samples: shards.into_iter().flat_map(|(s, _)| s).collect(), resumed, shards: shard_count })
+    }
 }
 
 /// Everything that shapes the samples of a shard (not the training settings).

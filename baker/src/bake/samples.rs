@@ -64,32 +64,113 @@ pub fn sample_configuration(
     seed: u64,
 ) -> Vec<Sample> {
     let world = World::new(scene, geometry, Some(config.light));
-    let mut samples = Vec::new();
-    for ray in 0..rays {
-        let mut rng = Rng::new(seed, u64::from(ray));
-        let dir = uniform_sphere(rng.next_vec2());
-        let Some(hit) = world.intersect(config.viewpoint, dir) else { continue };
-        let si = world.interaction(config.viewpoint, dir, hit);
-        let material = &scene.materials[geometry.triangles[hit.triangle as usize].material as usize];
-        // Emitters show their emission and learn nothing; the inside of a closed one-sided
-        // surface is never seen.
-        if material.is_emissive() || (!si.front_face && !material.double_sided) {
-            continue;
-        }
-        let mut sum = Radiance::default();
-        for path in 0..paths_per_sample {
-            let mut path_rng = Rng::new(seed ^ mix64(u64::from(ray) + 1), u64::from(path));
-            sum += radiance_leaving(&world, &si, -dir, trace, &mut path_rng);
-        }
-        let mean = sum.scaled(1.0 / paths_per_sample.max(1) as f32);
-        samples.push(Sample {
-            object: si.object,
-            inputs: raw_inputs(si.position, -dir, config.light, si.shading_normal, si.roughness),
-            direct: mean.direct.to_array(),
-            indirect: mean.indirect.to_array(),
-        });
+    (0..rays)
+        .filter_map(|ray| {
+            let dir = uniform_sphere(Rng::new(seed, u64::from(ray)).next_vec2());
+            sample_along(&world, config, dir, None, paths_per_sample, trace, seed, ray)
+        })
+        .collect()
+}
+
+/// Points on an object's surface, drawn uniformly by area.
+pub struct SurfacePoints {
+    object: u32,
+    /// Corners of the object's triangles, and their cumulative areas.
+    triangles: Vec<[Vec3; 3]>,
+    cumulative: Vec<f32>,
+}
+
+impl SurfacePoints {
+    pub fn new(scene: &Scene, object: u32) -> Self {
+        let o = &scene.objects[object as usize];
+        let triangles: Vec<[Vec3; 3]> = o.triangles.iter().map(|t| t.map(|i| o.positions[i as usize])).collect();
+        let mut total = 0.0;
+        let cumulative = triangles
+            .iter()
+            .map(|[a, b, c]| {
+                total += 0.5 * (*b - *a).cross(*c - *a).length();
+                total
+            })
+            .collect();
+        SurfacePoints { object, triangles, cumulative }
     }
-    samples
+
+    pub fn object(&self) -> u32 {
+        self.object
+    }
+
+    fn point(&self, rng: &mut Rng) -> Option<Vec3> {
+        let total = *self.cumulative.last()?;
+        let pick = rng.next_f32() * total;
+        let i = self.cumulative.partition_point(|&c| c <= pick).min(self.triangles.len() - 1);
+        let [a, b, c] = self.triangles[i];
+        let (u, v) = (rng.next_f32(), rng.next_f32());
+        let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
+        Some(a + (b - a) * u + (c - a) * v)
+    }
+}
+
+/// Samples of one object from one configuration, for objects that rays over the sphere
+/// rarely hit: `rays` rays aimed at points drawn on the object by area, kept where the object
+/// is what the ray meets first. The same arguments always give the same samples.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_object(
+    scene: &Scene,
+    geometry: &Geometry,
+    config: &Configuration,
+    target: &SurfacePoints,
+    rays: u32,
+    paths_per_sample: u32,
+    trace: &TraceSettings,
+    seed: u64,
+) -> Vec<Sample> {
+    let world = World::new(scene, geometry, Some(config.light));
+    (0..rays)
+        .filter_map(|ray| {
+            let point = target.point(&mut Rng::new(seed, u64::from(ray)))?;
+            let dir = (point - config.viewpoint).normalize_or_zero();
+            if dir == Vec3::ZERO {
+                return None;
+            }
+            sample_along(&world, config, dir, Some(target.object), paths_per_sample, trace, seed, ray)
+        })
+        .collect()
+}
+
+/// The sample at the first surface along `dir` from the viewpoint, if it is a learnable one
+/// (and on `only`, when given): the network inputs, and direct and indirect radiance averaged
+/// over `paths` paths.
+#[allow(clippy::too_many_arguments)]
+fn sample_along(
+    world: &World,
+    config: &Configuration,
+    dir: Vec3,
+    only: Option<u32>,
+    paths: u32,
+    trace: &TraceSettings,
+    seed: u64,
+    ray: u32,
+) -> Option<Sample> {
+    let hit = world.intersect(config.viewpoint, dir)?;
+    let si = world.interaction(config.viewpoint, dir, hit);
+    let material = &world.scene.materials[world.geometry.triangles[hit.triangle as usize].material as usize];
+    // Emitters show their emission and learn nothing; the inside of a closed one-sided
+    // surface is never seen.
+    if material.is_emissive() || (!si.front_face && !material.double_sided) || only.is_some_and(|o| o != si.object) {
+        return None;
+    }
+    let mut sum = Radiance::default();
+    for path in 0..paths {
+        let mut path_rng = Rng::new(seed ^ mix64(u64::from(ray) + 1), u64::from(path));
+        sum += radiance_leaving(world, &si, -dir, trace, &mut path_rng);
+    }
+    let mean = sum.scaled(1.0 / paths.max(1) as f32);
+    Some(Sample {
+        object: si.object,
+        inputs: raw_inputs(si.position, -dir, config.light, si.shading_normal, si.roughness),
+        direct: mean.direct.to_array(),
+        indirect: mean.indirect.to_array(),
+    })
 }
 
 /// Flat little-endian encoding of samples for shard files: per sample the object id (u32),
