@@ -28,6 +28,11 @@ enum Command {
         json: bool,
     },
 
+    /// Write a starter sidecar for a glTF: the light that moves (the scene's light, its
+    /// brightest emitter, or a point light the sidecar adds), its box, a camera box and a view.
+    ///
+    /// Prints what it chose. The sidecar is the glTF's name with .toml; edit it freely.
+    Init(rrf::commands::init::InitArgs),
     /// Path-trace ground truth on the CPU, by component (emitted, direct, indirect, or all).
     ///
     /// Uses all cores. The same seed gives the same image. EXR output is linear radiance;
@@ -69,6 +74,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Info { scene, json } => rrf::commands::info::run(scene.as_deref(), json),
+        Command::Init(args) => rrf::commands::init::run(&args),
         Command::Reference(args) => rrf::commands::reference::run(&args),
         Command::Bake(args) => rrf::commands::bake::run(&args),
         Command::Render(args) => rrf::commands::render::run(&args),

@@ -107,6 +107,7 @@ fn scene(meshes: Vec<(Mesh, Material)>, point_lights: Vec<PointLight>) -> Scene 
             id: i as u32,
             name: format!("object{i}"),
             node: i,
+            origin: Vec3::ZERO,
             uvs: vec![Vec2::ZERO; mesh.positions.len()],
             positions: mesh.positions,
             normals: mesh.normals,
@@ -211,7 +212,7 @@ fn point_light_over_a_plane() {
     let (rho, h, intensity) = (0.5f32, 1.0f32, Vec3::new(2.0, 1.0, 0.5));
     let s = scene(
         vec![(square(Vec3::ZERO, 50.0, 1.0), material(rho, 0.0))],
-        vec![PointLight { name: "lamp".into(), node: 0, position: Vec3::new(0.0, h, 0.0), intensity }],
+        vec![PointLight { name: "lamp".into(), node: None, position: Vec3::new(0.0, h, 0.0), intensity }],
     );
     let geometry = Geometry::new(&s);
     let world = World::new(&s, &geometry, None);

@@ -712,3 +712,13 @@ fn a_sidecar_under_another_name_is_named_not_silently_ignored() {
     let scene = Scene::load(&dir.join("MyScene.gltf")).unwrap();
     assert!(scene.moving_light.is_some() && scene.warnings.is_empty(), "{:?}", scene.warnings);
 }
+
+#[test]
+fn a_sidecar_light_may_not_take_a_name_of_the_gltf() {
+    let dir = cornell_with_sidecar(
+        "added-light",
+        "[light]\nnode = \"TallBlock\"\nmin = [0.1, 0.3, 0.1]\nmax = [0.4, 0.5, 0.4]\nintensity = [1, 1, 1]\n",
+    );
+    let message = load_err(&dir);
+    assert!(message.contains("light.intensity") && message.contains("TallBlock"), "{message}");
+}

@@ -4,6 +4,7 @@ pub mod bake;
 pub mod bench;
 pub mod eval;
 pub mod info;
+pub mod init;
 pub mod reference;
 pub mod render;
 pub mod variant;

@@ -101,7 +101,6 @@ pub(super) fn import(
     let mut objects: Vec<Object> = Vec::new();
     let mut point_lights: Vec<PointLight> = Vec::new();
     let mut views: Vec<View> = Vec::new();
-    let mut node_positions: HashMap<usize, Vec3> = HashMap::new();
     let mut visited = HashSet::new();
     let mut skipped_primitives = 0;
     let mut stack: Vec<(gltf::Node, Mat4)> =
@@ -116,7 +115,6 @@ pub(super) fn import(
             return Err(err(&element, "has a non-finite transform".into()));
         }
         let node_name = node.name().map(str::to_owned).unwrap_or_else(|| format!("node{}", node.index()));
-        node_positions.insert(node.index(), world.transform_point3(Vec3::ZERO));
 
         if let Some(mesh) = node.mesh() {
             if let Some(other) = objects.iter().find(|o| o.name == node_name) {
@@ -154,7 +152,7 @@ pub(super) fn import(
                     }
                     point_lights.push(PointLight {
                         name: node_name.clone(),
-                        node: node.index(),
+                        node: Some(node.index()),
                         position: world.transform_point3(Vec3::ZERO),
                         intensity,
                     })
@@ -214,6 +212,26 @@ pub(super) fn import(
         None => None,
         Some(domain) => {
             let bounds = Aabb { min: domain.min.into(), max: domain.max.into() };
+            if let Some(intensity) = domain.intensity {
+                let taken =
+                    point_lights.iter().any(|l| l.name == domain.node) || objects.iter().any(|o| o.name == domain.node);
+                if taken {
+                    return Err(SceneError::new(
+                        sidecar_file,
+                        "light.intensity",
+                        format!(
+                            "adds a new light, but {:?} names a node of the glTF; remove `intensity` to move that one",
+                            domain.node
+                        ),
+                    ));
+                }
+                point_lights.push(PointLight {
+                    name: domain.node.clone(),
+                    node: None,
+                    position: (bounds.min + bounds.max) * 0.5,
+                    intensity: Vec3::from(intensity),
+                });
+            }
             let dark =
                 |what: &str| Err(SceneError::new(sidecar_file, "light.node", format!("node {:?} {what}", domain.node)));
             let (kind, default_position) = if let Some(i) = point_lights.iter().position(|l| l.name == domain.node) {
@@ -228,7 +246,7 @@ pub(super) fn import(
                 if emitting_area(o, &materials) <= 0.0 {
                     return dark("is an emitter with no area: its emissive triangles are degenerate");
                 }
-                (LightKind::Area(o.id), node_positions[&o.node])
+                (LightKind::Area(o.id), o.origin)
             } else {
                 let lights: Vec<&str> = point_lights
                     .iter()
@@ -456,6 +474,7 @@ impl Importer<'_> {
             id,
             name,
             node,
+            origin: world.transform_point3(Vec3::ZERO),
             positions: vec![],
             normals: vec![],
             uvs: vec![],

@@ -63,6 +63,8 @@ pub struct Object {
     pub name: String,
     /// Index of the glTF node.
     pub node: usize,
+    /// The node's world translation: where a moving area light "is".
+    pub origin: Vec3,
     /// World-space vertices.
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
@@ -106,7 +108,8 @@ impl Material {
 #[derive(Clone, Debug)]
 pub struct PointLight {
     pub name: String,
-    pub node: usize,
+    /// The glTF node; `None` for the light a sidecar adds.
+    pub node: Option<usize>,
     pub position: Vec3,
     /// Radiant intensity (linear RGB, W/sr).
     pub intensity: Vec3,

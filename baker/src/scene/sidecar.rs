@@ -5,6 +5,8 @@
 //! node = "CeilingLight"      # a KHR_lights_punctual point-light node or an emissive mesh node
 //! min = [0.15, 0.45, 0.15]   # metres, world space
 //! max = [0.40, 0.54, 0.40]
+//! # intensity = [5, 5, 5]    # instead: a point light that the sidecar adds, named `node`,
+//! #                          # at the box's centre, in W/sr (for scenes without a light)
 //!
 //! [camera]                   # where the camera may be during the walkthrough
 //! min = [0.05, 0.05, -0.9]
@@ -45,6 +47,9 @@ pub struct LightDomain {
     pub node: String,
     pub min: [f32; 3],
     pub max: [f32; 3],
+    /// With it, the sidecar adds a point light of this radiant intensity (W/sr) named `node`
+    /// at the box's centre, instead of naming one of the glTF.
+    pub intensity: Option<[f32; 3]>,
 }
 
 #[derive(Clone, Debug, Deserialize)]
@@ -140,6 +145,15 @@ impl Sidecar {
     fn check(&self, file: &Path) -> Result<(), SceneError> {
         if let Some(light) = &self.light {
             check_box(file, "light", light.min, light.max)?;
+            if let Some(intensity) = light.intensity {
+                if !intensity.iter().all(|v| (0.0..=1e9).contains(v)) || intensity.iter().all(|&v| v == 0.0) {
+                    return Err(SceneError::new(
+                        file,
+                        "light.intensity",
+                        "must lie between 0 and 1e9 W/sr per channel, and not all 0",
+                    ));
+                }
+            }
         }
         if let Some(camera) = &self.camera {
             check_box(file, "camera", camera.min, camera.max)?;
