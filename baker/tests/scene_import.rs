@@ -722,3 +722,30 @@ fn a_sidecar_light_may_not_take_a_name_of_the_gltf() {
     let message = load_err(&dir);
     assert!(message.contains("light.intensity") && message.contains("TallBlock"), "{message}");
 }
+
+#[test]
+fn point_light_intensity_is_candela_unless_the_sidecar_says_otherwise() {
+    let make = |test: &str, sidecar: Option<&str>| {
+        let dir = scratch(test);
+        let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+        gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+        gltf["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
+            { "type": "point", "intensity": 1366.0, "color": [1.0, 0.5, 0.25] }
+        ] } });
+        gltf["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "name": "Bulb", "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
+        gltf["scenes"][0]["nodes"] = json!([0, 1]);
+        if let Some(text) = sidecar {
+            std::fs::write(dir.join("scene.toml"), text).unwrap();
+        }
+        Scene::load(&write_scene(&dir, &gltf, &bin)).unwrap().point_lights[0].intensity
+    };
+    // 1366 cd = 2 W/sr at 683 lm/W.
+    assert_eq!(make("candela", None), Vec3::new(2.0, 1.0, 0.5));
+    assert_eq!(make("watts", Some("[units]\npoint_lights = \"W/sr\"\n")), Vec3::new(1366.0, 683.0, 341.5));
+    let dir = cornell_with_sidecar("bad-units", "[units]\npoint_lights = \"lumen\"\n");
+    let message = load_err(&dir);
+    assert!(message.contains("scene.toml") && message.contains("lumen"), "{message}");
+}

@@ -17,7 +17,10 @@ use super::error::SceneError;
 use super::external;
 use super::sidecar::{Aabb, Sidecar};
 use super::texture::{ColorSpace, Texture};
-use super::{LightKind, Material, MovingLight, Object, Part, PointLight, Scene, View, MAX_COORDINATE};
+use super::{
+    LightKind, Material, MovingLight, Object, Part, PointLight, PointLightUnits, Scene, View, CANDELA_PER_WATT,
+    MAX_COORDINATE,
+};
 
 /// Largest `KHR_materials_emissive_strength` and point-light intensity: far above the sun's
 /// disc, far below where sums of radiance overflow f32.
@@ -141,7 +144,11 @@ pub(super) fn import(
         if let Some(light) = node.light() {
             match light.kind() {
                 gltf::khr_lights_punctual::Kind::Point => {
-                    let intensity = Vec3::from(light.color()) * light.intensity();
+                    let watts = match sidecar.units.point_lights {
+                        PointLightUnits::Candela => light.intensity() / CANDELA_PER_WATT,
+                        PointLightUnits::WattsPerSteradian => light.intensity(),
+                    };
+                    let intensity = Vec3::from(light.color()) * watts;
                     if !(intensity.min_element() >= 0.0 && intensity.max_element() <= MAX_EMISSION) {
                         return Err(err(
                             &element,

@@ -2,8 +2,10 @@
 //!
 //! **Radiometric convention.** All colours are linear RGB. Emission (`emissiveFactor ×
 //! KHR_materials_emissive_strength`) is *radiance*, in W·sr⁻¹·m⁻² per channel. A
-//! `KHR_lights_punctual` point light's `color × intensity` is *radiant intensity*, in W·sr⁻¹
-//! per channel: rrf does not convert the glTF's photometric units. Lengths are metres.
+//! `KHR_lights_punctual` point light's intensity is in candela, as glTF says; rrf takes
+//! `color × intensity / 683` as its *radiant intensity* in W·sr⁻¹ per channel (683 lm/W, the
+//! luminous efficacy at 555 nm, for every channel). A sidecar's `[units] point_lights = "W/sr"`
+//! reads the number as W·sr⁻¹ directly. Lengths are metres.
 //!
 //! An **object** is a glTF node with a mesh. Objects are numbered in depth-first order of the
 //! scene's nodes, and named by their node: per-object networks are keyed by that name, so
@@ -22,7 +24,11 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3};
 
 pub use error::SceneError;
-pub use sidecar::{Aabb, BakeOverrides, BakePresets, Sidecar, ViewSpec};
+pub use sidecar::{Aabb, BakeOverrides, BakePresets, PointLightUnits, Sidecar, Units, ViewSpec};
+
+/// Candela per W/sr: the luminous efficacy of 555 nm light, which rrf applies to every channel
+/// of a glTF point light's intensity.
+pub const CANDELA_PER_WATT: f32 = 683.0;
 pub use texture::{ColorSpace, Texture};
 
 /// Largest distance from the origin, per axis, of anything in a scene (vertices, boxes,

@@ -19,6 +19,9 @@
 //!
 //! [bake.final]               # overrides of a bake preset (test, preview, final)
 //! configurations = 400
+//!
+//! [units]
+//! point_lights = "W/sr"      # point-light intensity in W/sr instead of glTF's candela
 //! ```
 
 use std::collections::BTreeMap;
@@ -39,6 +42,27 @@ pub struct Sidecar {
     pub views: BTreeMap<String, ViewSpec>,
     #[serde(default)]
     pub bake: BakePresets,
+    #[serde(default)]
+    pub units: Units,
+}
+
+/// How to read the glTF's numbers where exporters differ.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Units {
+    /// `KHR_lights_punctual` point-light intensity: candela, as glTF says (the default), or
+    /// W/sr for files written with rrf's radiometric units.
+    #[serde(default)]
+    pub point_lights: PointLightUnits,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum PointLightUnits {
+    #[default]
+    #[serde(rename = "candela")]
+    Candela,
+    #[serde(rename = "W/sr")]
+    WattsPerSteradian,
 }
 
 #[derive(Clone, Debug, Deserialize)]

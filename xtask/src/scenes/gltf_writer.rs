@@ -120,14 +120,15 @@ impl GltfBuilder {
         self.node(json!({ "name": name, "mesh": self.meshes.len() - 1, "translation": translation.to_array() }))
     }
 
-    /// A KHR_lights_punctual point light; `intensity` is radiant intensity, W/sr per channel.
+    /// A KHR_lights_punctual point light; `intensity` is radiant intensity, W/sr per channel,
+    /// written in candela as glTF says (683 cd per W/sr, as rrf reads it back).
     pub fn point_light(&mut self, name: &str, position: Vec3, intensity: [f32; 3]) -> usize {
         let strength = intensity.iter().copied().fold(0.0f32, f32::max);
         self.lights.push(json!({
             "name": name,
             "type": "point",
             "color": intensity.map(|c| c / strength),
-            "intensity": strength,
+            "intensity": strength * 683.0,
         }));
         self.node(json!({
             "name": name,
