@@ -5,7 +5,7 @@ use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
 
 use rrf_baker::glam::{Vec2, Vec3};
-use rrf_baker::scene::{BakePresets, Material, Object, Part, PointLight, Scene, View};
+use rrf_baker::scene::{BakePresets, Cone, Material, Object, Part, PointLight, Scene, View};
 use rrf_baker::trace::integrator::trace_ray;
 use rrf_baker::trace::sampling::Rng;
 use rrf_baker::trace::{render, Camera, Geometry, Radiance, RenderSettings, TraceSettings, World};
@@ -212,7 +212,7 @@ fn point_light_over_a_plane() {
     let (rho, h, intensity) = (0.5f32, 1.0f32, Vec3::new(2.0, 1.0, 0.5));
     let s = scene(
         vec![(square(Vec3::ZERO, 50.0, 1.0), material(rho, 0.0))],
-        vec![PointLight { name: "lamp".into(), node: None, position: Vec3::new(0.0, h, 0.0), intensity }],
+        vec![PointLight { name: "lamp".into(), node: None, position: Vec3::new(0.0, h, 0.0), intensity, cone: None }],
     );
     let geometry = Geometry::new(&s);
     let world = World::new(&s, &geometry, None);
@@ -228,6 +228,34 @@ fn point_light_over_a_plane() {
             r.direct
         );
         assert_eq!(r.indirect, Vec3::ZERO, "a single plane has no indirect light");
+    }
+}
+
+/// The same with a spot light pointing straight down, glTF's falloff between its cone angles:
+/// full inside the inner cone, none outside the outer, ((cos θ − cos o)/(cos i − cos o))² between.
+#[test]
+fn spot_light_over_a_plane() {
+    let (rho, h, intensity) = (0.5f32, 1.0f32, Vec3::new(2.0, 1.0, 0.5));
+    let (inner, outer) = (20f32.to_radians(), 30f32.to_radians());
+    let cone = Cone { direction: Vec3::NEG_Y, cos_inner: inner.cos(), cos_outer: outer.cos() };
+    let lamp =
+        PointLight { name: "spot".into(), node: None, position: Vec3::new(0.0, h, 0.0), intensity, cone: Some(cone) };
+    let s = scene(vec![(square(Vec3::ZERO, 50.0, 1.0), material(rho, 0.0))], vec![lamp]);
+    let geometry = Geometry::new(&s);
+    let world = World::new(&s, &geometry, None);
+    let settings = TraceSettings { max_depth: 8, rr_depth: None };
+    for degrees in [0.0f32, 10.0, 19.0, 22.0, 25.0, 28.0, 31.0, 45.0] {
+        let theta = degrees.to_radians();
+        let x = Vec3::new(h * theta.tan(), 0.0, 0.0);
+        let r = estimate(&world, x + Vec3::new(0.1, 0.4, 0.2), x, &settings, 4, 0);
+        let d = Vec3::new(0.0, h, 0.0) - x;
+        let falloff = ((theta.cos() - outer.cos()) / (inner.cos() - outer.cos())).clamp(0.0, 1.0).powi(2);
+        let expected = rho / PI * intensity * falloff * (h / d.length()) / d.length_squared();
+        assert!(
+            (r.direct - expected).abs().max_element() <= 1e-4 * intensity.max_element(),
+            "{degrees}°: {} vs {expected}",
+            r.direct
+        );
     }
 }
 

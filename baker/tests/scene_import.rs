@@ -749,3 +749,30 @@ fn point_light_intensity_is_candela_unless_the_sidecar_says_otherwise() {
     let message = load_err(&dir);
     assert!(message.contains("scene.toml") && message.contains("lumen"), "{message}");
 }
+
+#[test]
+fn spot_lights_keep_their_cone_and_directional_lights_say_why_they_are_skipped() {
+    let dir = scratch("spot");
+    let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    gltf["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
+        { "type": "spot", "intensity": 683.0, "spot": { "innerConeAngle": 0.2, "outerConeAngle": 0.5 } },
+        { "type": "directional", "intensity": 3.0 },
+    ] } });
+    // Rotated 90° about x: the node's -z points down (-y).
+    let (sin, cos) = (std::f32::consts::FRAC_PI_4.sin(), std::f32::consts::FRAC_PI_4.cos());
+    gltf["nodes"].as_array_mut().unwrap().extend([
+        json!({ "name": "Spot", "rotation": [-sin, 0.0, 0.0, cos], "translation": [0.0, 2.0, 0.0],
+                "extensions": { "KHR_lights_punctual": { "light": 0 } } }),
+        json!({ "name": "Sun", "extensions": { "KHR_lights_punctual": { "light": 1 } } }),
+    ]);
+    gltf["scenes"][0]["nodes"] = json!([0, 1, 2]);
+    let scene = Scene::load(&write_scene(&dir, &gltf, &bin)).unwrap();
+    let spot = &scene.point_lights[0];
+    let cone = spot.cone.expect("a spot light has a cone");
+    assert!((cone.direction - Vec3::NEG_Y).length() < 1e-5, "{}", cone.direction);
+    assert!((cone.cos_inner - 0.2f32.cos()).abs() < 1e-6 && (cone.cos_outer - 0.5f32.cos()).abs() < 1e-6);
+    assert_eq!(spot.intensity, Vec3::ONE);
+    assert_eq!(scene.point_lights.len(), 1);
+    assert!(scene.warnings.iter().any(|w| w.contains("\"Sun\"") && w.contains("no position")), "{:?}", scene.warnings);
+}

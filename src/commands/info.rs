@@ -91,7 +91,21 @@ fn scene_info(path: &Path, json: bool) -> Result<()> {
     }
     println!("\nlights");
     for l in &scene.point_lights {
-        println!("  point  {:<16} at {:?}, intensity {:?} W/sr", l.name, l.position.to_array(), l.intensity.to_array());
+        let cone = l.cone.map_or(String::new(), |c| {
+            format!(
+                ", spot towards {:?} ({:.1}°–{:.1}°)",
+                c.direction.to_array(),
+                c.cos_inner.acos().to_degrees(),
+                c.cos_outer.acos().to_degrees()
+            )
+        });
+        let kind = if l.cone.is_some() { "spot " } else { "point" };
+        println!(
+            "  {kind}  {:<16} at {:?}, intensity {:?} W/sr{cone}",
+            l.name,
+            l.position.to_array(),
+            l.intensity.to_array()
+        );
     }
     for o in scene.area_lights() {
         let emission =

@@ -68,6 +68,11 @@ pub(super) fn content_hash(scene: &Scene) -> u64 {
     for l in &scene.point_lights {
         w.bytes(l.name.as_bytes());
         w.vec3s([&l.position, &l.intensity]);
+        w.u64(u64::from(l.cone.is_some()));
+        if let Some(cone) = l.cone {
+            w.vec3s([&cone.direction]);
+            w.f32s([cone.cos_inner, cone.cos_outer]);
+        }
     }
     w.u64(u64::from(scene.moving_light.is_some()));
     if let Some(light) = &scene.moving_light {

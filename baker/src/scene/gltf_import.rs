@@ -18,7 +18,7 @@ use super::external;
 use super::sidecar::{Aabb, Sidecar};
 use super::texture::{ColorSpace, Texture};
 use super::{
-    LightKind, Material, MovingLight, Object, Part, PointLight, PointLightUnits, Scene, View, CANDELA_PER_WATT,
+    Cone, LightKind, Material, MovingLight, Object, Part, PointLight, PointLightUnits, Scene, View, CANDELA_PER_WATT,
     MAX_COORDINATE,
 };
 
@@ -143,7 +143,7 @@ pub(super) fn import(
         }
         if let Some(light) = node.light() {
             match light.kind() {
-                gltf::khr_lights_punctual::Kind::Point => {
+                gltf::khr_lights_punctual::Kind::Point | gltf::khr_lights_punctual::Kind::Spot { .. } => {
                     let watts = match sidecar.units.point_lights {
                         PointLightUnits::Candela => light.intensity() / CANDELA_PER_WATT,
                         PointLightUnits::WattsPerSteradian => light.intensity(),
@@ -162,9 +162,13 @@ pub(super) fn import(
                         node: Some(node.index()),
                         position: world.transform_point3(Vec3::ZERO),
                         intensity,
+                        cone: spot_cone(&light, &world).map_err(|problem| err(&element, problem))?,
                     })
                 }
-                _ => importer.warnings.push(format!("{element}: only point lights are supported; light skipped")),
+                gltf::khr_lights_punctual::Kind::Directional => importer.warnings.push(format!(
+                    "{element}: directional light skipped: rrf's networks learn a light that moves inside a box, \
+                     and a directional light has no position (use a distant point light or an emissive quad)"
+                )),
             }
         }
         if let Some(camera) = node.camera() {
@@ -237,6 +241,7 @@ pub(super) fn import(
                     node: None,
                     position: (bounds.min + bounds.max) * 0.5,
                     intensity: Vec3::from(intensity),
+                    cone: None,
                 });
             }
             let dark =
@@ -358,6 +363,26 @@ fn framing_view(bounds: &Aabb) -> View {
     let radius = ((bounds.max - bounds.min).length() * 0.5).max(1e-3);
     let distance = radius / (FOV_Y.to_radians() * 0.5).sin();
     View { name: "default".into(), eye: centre + Vec3::Z * distance, target: centre, up: Vec3::Y, fov_y: FOV_Y }
+}
+
+/// A spot light's cone from its angles and its node's -z; `None` for a point light.
+fn spot_cone(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Result<Option<Cone>, String> {
+    let gltf::khr_lights_punctual::Kind::Spot { inner_cone_angle, outer_cone_angle } = light.kind() else {
+        return Ok(None);
+    };
+    if !(0.0 <= inner_cone_angle
+        && inner_cone_angle < outer_cone_angle
+        && outer_cone_angle <= std::f32::consts::FRAC_PI_2)
+    {
+        return Err(format!(
+            "spot cone angles {inner_cone_angle} and {outer_cone_angle} rad must satisfy 0 ≤ inner < outer ≤ π/2"
+        ));
+    }
+    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
+    if direction == Vec3::ZERO {
+        return Err("the spot light's transform leaves it no direction (a zero scale)".into());
+    }
+    Ok(Some(Cone { direction, cos_inner: inner_cone_angle.cos(), cos_outer: outer_cone_angle.cos() }))
 }
 
 /// Total area of an object's emissive triangles.

@@ -117,8 +117,29 @@ pub struct PointLight {
     /// The glTF node; `None` for the light a sidecar adds.
     pub node: Option<usize>,
     pub position: Vec3,
-    /// Radiant intensity (linear RGB, W/sr).
+    /// Radiant intensity (linear RGB, W/sr); on a spot light's axis.
     pub intensity: Vec3,
+    /// For a spot light (`KHR_lights_punctual` type `spot`), its cone; `None` shines everywhere.
+    pub cone: Option<Cone>,
+}
+
+/// A spot light's cone, with glTF's falloff: full intensity within the inner angle, none
+/// outside the outer one, and in between the square of a linear ramp in the cosine.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cone {
+    /// Where the spot points (unit, world space): the node's -z.
+    pub direction: Vec3,
+    pub cos_inner: f32,
+    pub cos_outer: f32,
+}
+
+impl Cone {
+    /// The share of the intensity sent along `to` (unit, from the light).
+    pub fn attenuation(&self, to: Vec3) -> f32 {
+        let scale = 1.0 / (self.cos_inner - self.cos_outer).max(1e-3);
+        let t = ((self.direction.dot(to) - self.cos_outer) * scale).clamp(0.0, 1.0);
+        t * t
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -153,7 +153,8 @@ pub fn radiance_leaving(
             let distance2 = to_light.length_squared();
             let distance = distance2.sqrt();
             let direction = to_light / distance;
-            if direction.dot(si.geometric_normal) <= 0.0 {
+            let spot = light.cone.map_or(1.0, |cone| cone.attenuation(-direction));
+            if direction.dot(si.geometric_normal) <= 0.0 || spot == 0.0 {
                 continue;
             }
             let wi = frame.to_local(direction);
@@ -163,7 +164,7 @@ pub fn radiance_leaving(
             }
             let origin = offset_origin(si, direction);
             if !world.occluded(origin, direction, distance * (1.0 - 1e-4)) {
-                out.add(segments + 1, beta * f * light.intensity * (wi.z / distance2));
+                out.add(segments + 1, beta * f * light.intensity * (spot * wi.z / distance2));
             }
         }
 

@@ -7,7 +7,7 @@ use obvhs::rt_triangle::RtTriangle;
 use super::bsdf::Bsdf;
 use super::geometry::{Geometry, Hit};
 use super::sampling::uniform_triangle;
-use crate::scene::{LightKind, Scene};
+use crate::scene::{Cone, LightKind, Scene};
 
 /// An emissive triangle where this configuration puts it, with the probability of choosing
 /// it for next-event estimation.
@@ -26,8 +26,9 @@ struct Emitter {
 #[derive(Clone, Copy, Debug)]
 pub struct PointLightAt {
     pub position: Vec3,
-    /// Radiant intensity, W/sr.
+    /// Radiant intensity, W/sr (on a spot light's axis).
     pub intensity: Vec3,
+    pub cone: Option<Cone>,
 }
 
 pub struct World<'a> {
@@ -81,8 +82,11 @@ impl<'a> World<'a> {
             (Some(light), Some(p)) => p - light.default_position,
             _ => Vec3::ZERO,
         };
-        let mut point_lights: Vec<PointLightAt> =
-            scene.point_lights.iter().map(|l| PointLightAt { position: l.position, intensity: l.intensity }).collect();
+        let mut point_lights: Vec<PointLightAt> = scene
+            .point_lights
+            .iter()
+            .map(|l| PointLightAt { position: l.position, intensity: l.intensity, cone: l.cone })
+            .collect();
         if let Some(LightKind::Point(i)) = moving.map(|l| l.kind) {
             point_lights[i].position += light_offset;
         }
