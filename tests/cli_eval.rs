@@ -64,6 +64,9 @@ fn eval_reports_metrics_figures_and_caches_references() {
         assert!(png.width() > 5 * 48 && png.height() > 32, "five panels and the labels");
         finite(&c["metrics"]);
         assert!(beats_trivial_predictions(c), "{c}");
+        // Two 8-spp references differ, but far less than a black image does.
+        let floor = c["floor"]["flip"].as_f64().unwrap();
+        assert!(floor > 0.0 && floor < c["baselines"]["black"]["flip"].as_f64().unwrap(), "{c}");
     }
     finite(&first["mean"]);
 

@@ -17,14 +17,17 @@ use rrf_renderer::{vk, Context, ContextOptions};
 use super::bake::default_model_path;
 use crate::eval::configs::{held_out, EvalConfig};
 use crate::eval::figure::{compose, Panel};
-use crate::eval::metrics::{compare, Baselines};
+use crate::eval::metrics::{compare, Baselines, Metrics};
 use crate::eval::reference_cache::{default_cache_dir, reference};
 use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, ConfigReport, Report};
 use crate::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
 use crate::image_out::tonemap_rgb8;
 use crate::progress::Progress;
+use rrf_baker::trace::sampling::mix64;
 
 const MAX_DEPTH: u32 = 8;
+/// Separates the second reference's paths (the floor's) from the first's.
+const FLOOR_STREAM: u64 = 0xf100_0000_0000_0001;
 const RR_DEPTH: u32 = 5;
 
 #[derive(Args, Debug)]
@@ -127,16 +130,28 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                 Progress::new(u64::from(width * height), &format!("reference {}/{}", i + 1, configs.len()), false);
             let (truth, cached) = reference(&scene, &geometry, config, &settings, &cache, &|n| progress.inc(n))?;
             progress.finish();
+            // The floor: a second reference with independent paths, scored against the first.
+            let progress = Progress::new(
+                u64::from(width * height),
+                &format!("second reference {}/{}", i + 1, configs.len()),
+                false,
+            );
+            let second = RenderSettings { seed: mix64(args.seed ^ FLOOR_STREAM), ..settings };
+            let (twin, _) = reference(&scene, &geometry, config, &second, &cache, &|n| progress.inc(n))?;
+            progress.finish();
+            let gi = |image: &rrf_baker::trace::RadianceImage| image.pixels.iter().map(|r| r.gi()).collect::<Vec<_>>();
+            let floor = compare(&gi(&twin), &gi(&truth), width, height).metrics;
             let predicted = predict(&predictor, &scene, &geometry, &model, config, width, height)?;
             let figure = format!("{:02}-{}.png", i, config.name);
             let (metrics, baselines) =
                 evaluate(&predicted, &truth.pixels, width, height, args.spp, &args.output.join(&figure))?;
             eprintln!(
-                "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4} (black: FLIP {:.4}, mean colour: FLIP {:.4}){}",
+                "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4} (floor {:.4}; black {:.4}, mean colour {:.4}){}",
                 config.name,
                 metrics.gi.relmse,
                 metrics.gi.psnr,
                 metrics.gi.flip,
+                floor.flip,
                 baselines.black.flip,
                 baselines.mean_colour.flip,
                 if cached { " (cached reference)" } else { "" }
@@ -150,6 +165,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                 reference_cached: cached,
                 metrics,
                 baselines,
+                floor,
             })
         })
         .collect();
@@ -165,6 +181,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let all: Vec<ComponentMetrics> = configs.iter().map(|c| c.metrics).collect();
     let mean = ComponentMetrics::mean(&all);
     let mean_baselines = Baselines::mean(configs.iter().map(|c| &c.baselines));
+    let mean_floor = Metrics::mean(configs.iter().map(|c| &c.floor));
     let report = Report {
         scene: scene.name.clone(),
         model: model_path.display().to_string(),
@@ -178,6 +195,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         configs,
         mean,
         mean_baselines,
+        mean_floor,
     };
     report::write(&args.output, &report)?;
     println!("{:<10} {:>10} {:>9} {:>8}", "component", "relMSE", "PSNR dB", "FLIP");
@@ -187,6 +205,11 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     for (name, m) in [("black", mean_baselines.black), ("mean colour", mean_baselines.mean_colour)] {
         println!("{:<10} {:>10.4} {:>9.2} {:>8.4}  (trivial prediction of gi)", name, m.relmse, m.psnr, m.flip);
     }
+    let m = mean_floor;
+    println!(
+        "{:<10} {:>10.4} {:>9.2} {:>8.4}  (a second reference against the first)",
+        "floor", m.relmse, m.psnr, m.flip
+    );
     eprintln!("wrote {}", args.output.join("index.html").display());
     Ok(())
 }

@@ -47,6 +47,9 @@ pub struct ConfigReport {
     pub metrics: ComponentMetrics,
     /// The global image's metrics for trivial predictions of the same reference.
     pub baselines: Baselines,
+    /// The global image's metrics of a second reference of the same spp with independent
+    /// paths, against the first: below it, a prediction's error is the references' noise.
+    pub floor: Metrics,
 }
 
 #[derive(Debug, Serialize)]
@@ -64,6 +67,7 @@ pub struct Report {
     pub configs: Vec<ConfigReport>,
     pub mean: ComponentMetrics,
     pub mean_baselines: Baselines,
+    pub mean_floor: Metrics,
 }
 
 pub fn write(dir: &Path, report: &Report) -> Result<()> {
