@@ -708,6 +708,11 @@ fn a_sidecar_under_another_name_is_named_not_silently_ignored() {
         scene.warnings
     );
     assert_eq!(scene.sidecar_file(), dir.join("MyScene.toml"));
+    assert_eq!(scene.model_file(), dir.join("MyScene.safetensors"), "two glTFs in a folder keep their models apart");
+    assert_eq!(
+        Scene::load(&repo().join("scenes/cornell-box")).unwrap().model_file(),
+        repo().join("scenes/cornell-box/model.safetensors")
+    );
     std::fs::rename(dir.join("scene.toml"), dir.join("MyScene.toml")).unwrap();
     let scene = Scene::load(&dir.join("MyScene.gltf")).unwrap();
     assert!(scene.moving_light.is_some() && scene.warnings.is_empty(), "{:?}", scene.warnings);

@@ -33,8 +33,9 @@ pub struct BakeArgs {
     /// Random seed, any 64-bit integer: the same seed gives the same model.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Model file to write (.safetensors); default: model.safetensors in the scene's folder.
-    /// While it bakes, MODEL.lock keeps a second bake of the same model out.
+    /// Model file to write (.safetensors); default: model.safetensors beside scene.gltf or
+    /// scene.glb, X.safetensors beside any other X.gltf or X.glb. While it bakes, MODEL.lock
+    /// keeps a second bake of the same model out.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Keep the bake cache (MODEL.bake-cache/: sample shards and trained networks) after a
@@ -62,14 +63,10 @@ impl BakeProgress for Bars {
     }
 }
 
-pub fn default_model_path(scene: &Scene) -> PathBuf {
-    scene.gltf_path.parent().unwrap_or(Path::new(".")).join("model.safetensors")
-}
-
 /// The model to render `scene` with (`path`, or the scene's own), checked against the scene,
 /// with a warning for each object it has no network for.
 pub fn model_to_render(scene: &Scene, path: Option<&Path>) -> Result<Model> {
-    let path = path.map_or_else(|| default_model_path(scene), Path::to_path_buf);
+    let path = path.map_or_else(|| scene.model_file(), Path::to_path_buf);
     let model = Model::load(&path, Some(scene))?;
     for u in &model.metadata.untrained {
         eprintln!("warning: {} has no network ({}); it renders black", u.object, u.reason);
@@ -119,7 +116,7 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         QualityArg::Final => Quality::Final,
     };
     let settings = BakeSettings::new(quality, args.seed, &scene);
-    let output = args.output.clone().unwrap_or_else(|| default_model_path(&scene));
+    let output = args.output.clone().unwrap_or_else(|| scene.model_file());
     check_output(&output)?;
     let cache = output.with_extension("bake-cache");
     let lock = BakeLock::acquire(&output)?;

@@ -12,7 +12,6 @@ use rrf_renderer::frames::{FrameLoop, FRAMES_IN_FLIGHT};
 use rrf_renderer::{vk, Context, ContextOptions, Validation};
 use serde_json::json;
 
-use super::bake::default_model_path;
 use super::variant::VariantArg;
 use crate::frame_stats::{median, Stats};
 use crate::gpu_frame::{FrameOutput, FrameSettings, GpuFrame, Shown, TIMESTAMPS};
@@ -58,8 +57,7 @@ fn parse_variants(s: &str) -> Result<Variants, String> {
 pub struct BenchArgs {
     #[arg(help = super::SCENE_HELP)]
     pub scene: PathBuf,
-    /// Model file; default: model.safetensors in the scene's folder.
-    #[arg(long)]
+    #[arg(long, help = super::MODEL_HELP)]
     pub model: Option<PathBuf>,
     /// A named view; default: the glTF camera.
     #[arg(long)]
@@ -93,7 +91,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         bail!("--frames must be at least 1");
     }
     let scene = Scene::load(&args.scene)?;
-    let model = Model::load(&args.model.clone().unwrap_or_else(|| default_model_path(&scene)), Some(&scene))?;
+    let model = Model::load(&args.model.clone().unwrap_or_else(|| scene.model_file()), Some(&scene))?;
     let view = super::view_args::named_view(&scene, args.view.as_deref())?;
     // Timing runs without the validation layer unless RRF_VALIDATION asks for it.
     let mut options = ContextOptions::from_env();

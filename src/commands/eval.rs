@@ -14,7 +14,6 @@ use rrf_baker::trace::{Camera, Geometry, TraceSettings, World};
 use rrf_renderer::network_pass::Variant;
 use rrf_renderer::{vk, Context, ContextOptions};
 
-use super::bake::default_model_path;
 use crate::eval::configs::{held_out, EvalConfig};
 use crate::eval::figure::{compose, Panel};
 use crate::eval::metrics::{compare, Baselines, Metrics};
@@ -34,8 +33,7 @@ const RR_DEPTH: u32 = 5;
 pub struct EvalArgs {
     #[arg(help = super::SCENE_HELP)]
     pub scene: PathBuf,
-    /// Model file; default: model.safetensors in the scene's folder.
-    #[arg(long)]
+    #[arg(long, help = super::MODEL_HELP)]
     pub model: Option<PathBuf>,
     /// Random configurations (Latin hypercube over the light and camera boxes), on top of one
     /// per named view of the sidecar; 0 to 10,000.
@@ -85,7 +83,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         bail!("--spp must be at least 1");
     }
     let scene = Scene::load(&args.scene)?;
-    let model_path = args.model.clone().unwrap_or_else(|| default_model_path(&scene));
+    let model_path = args.model.clone().unwrap_or_else(|| scene.model_file());
     let model = Model::load(&model_path, Some(&scene))?;
     let geometry = Geometry::new(&scene);
     let configs = held_out(&scene, &geometry, args.configs as usize, args.seed)?;

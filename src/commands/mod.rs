@@ -11,6 +11,10 @@ pub mod variant;
 pub mod view;
 pub mod view_args;
 
+/// The --model flag of the commands that render from a model.
+pub const MODEL_HELP: &str = "Model file; default: model.safetensors beside scene.gltf or scene.glb, \
+X.safetensors beside any other X.gltf or X.glb (where `rrf bake` writes it)";
+
 /// What every command's SCENE argument accepts, and where the sidecar is looked for.
 pub const SCENE_HELP: &str = "Scene: a folder holding scene.gltf or scene.glb, or a .gltf or .glb file. \
 Its sidecar (light and camera boxes, views, bake settings) is the glTF's name with .toml: scene.toml, or \

@@ -22,8 +22,7 @@ use crate::image_out::{check_output, write_image};
 pub struct RenderArgs {
     #[command(flatten)]
     pub view: ViewArgs,
-    /// Model file; default: model.safetensors in the scene's folder.
-    #[arg(long)]
+    #[arg(long, help = super::MODEL_HELP)]
     pub model: Option<PathBuf>,
     /// Which light to show.
     #[arg(long, value_enum, default_value_t = Component::Gi)]

@@ -40,8 +40,7 @@ impl PresentMode {
 pub struct ViewArgs {
     #[arg(help = super::SCENE_HELP)]
     pub scene: PathBuf,
-    /// Model file; default: model.safetensors in the scene's folder.
-    #[arg(long)]
+    #[arg(long, help = super::MODEL_HELP)]
     pub model: Option<PathBuf>,
     /// A named view to start from (see `rrf info SCENE`); default: the glTF camera.
     #[arg(long)]

@@ -197,6 +197,16 @@ impl Scene {
         self.gltf_path.with_extension("toml")
     }
 
+    /// Where this scene's model goes by default: `model.safetensors` beside a `scene.gltf` or
+    /// `scene.glb` (a scene folder), else the glTF's path with the extension `.safetensors`,
+    /// so that two glTF files in one folder keep their models apart.
+    pub fn model_file(&self) -> PathBuf {
+        match self.gltf_path.file_stem().and_then(|s| s.to_str()) {
+            Some("scene") => self.gltf_path.with_file_name("model.safetensors"),
+            _ => self.gltf_path.with_extension("safetensors"),
+        }
+    }
+
     /// Imports glTF or GLB `bytes` as if read from `file`, without a sidecar: external buffers
     /// and images resolve against `file`'s folder.
     pub fn from_gltf_bytes(file: &Path, bytes: &[u8]) -> Result<Self, SceneError> {
