@@ -9,7 +9,7 @@
 use std::path::Path;
 
 use rrf_baker::bake::lm::{self, initial_parameters, Dataset, LmSettings};
-use rrf_baker::bake::samples::{latin_hypercube, sample_configuration, Sample};
+use rrf_baker::bake::samples::{latin_hypercube, sample_configuration, Aim, Sample};
 use rrf_baker::bake::{network_data, BakeSettings, Quality};
 use rrf_baker::network::{normalize, Component};
 use rrf_baker::scene::Scene;
@@ -23,7 +23,7 @@ fn floor_samples(scene: &Scene, geometry: &Geometry, count: usize, paths: u32, s
     let configs = latin_hypercube(256, &light.bounds, &scene.camera_box.unwrap(), seed);
     for (i, c) in configs.iter().cycle().enumerate() {
         out.extend(
-            sample_configuration(scene, geometry, c, 400, paths, &trace, seed * 1_000_003 + i as u64)
+            sample_configuration(scene, geometry, c, Aim::Sphere, 400, paths, &trace, seed * 1_000_003 + i as u64)
                 .into_iter()
                 .filter(|s| s.object == floor),
         );

@@ -13,7 +13,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use rrf_baker::bake::lm::{self, initial_parameters, Dataset, LmSettings};
-use rrf_baker::bake::samples::{latin_hypercube, sample_configuration};
+use rrf_baker::bake::samples::{latin_hypercube, sample_configuration, Aim};
 use rrf_baker::bake::{network_data, BakeSettings, Quality};
 use rrf_baker::network::{
     hidden_layers, Component, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3,
@@ -119,7 +119,7 @@ fn main() {
     let samples: Vec<_> = configs
         .iter()
         .enumerate()
-        .flat_map(|(i, c)| sample_configuration(&scene, &geometry, c, 6000, 32, &trace, i as u64))
+        .flat_map(|(i, c)| sample_configuration(&scene, &geometry, c, Aim::Sphere, 6000, 32, &trace, i as u64))
         .filter(|s| s.object == floor)
         .collect();
     let refs: Vec<_> = samples.iter().collect();

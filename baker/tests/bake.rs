@@ -237,7 +237,7 @@ fn every_object_seen_from_the_camera_box_gets_networks() {
 
 #[test]
 fn aimed_rays_sample_only_their_object_where_it_is_seen() {
-    use rrf_baker::bake::samples::{latin_hypercube, sample_object, SurfacePoints};
+    use rrf_baker::bake::samples::{latin_hypercube, sample_configuration, Aim, SurfacePoints};
     use rrf_baker::trace::{Geometry, TraceSettings};
     let scene = scene("cornell-box");
     let geometry = Geometry::new(&scene);
@@ -245,7 +245,8 @@ fn aimed_rays_sample_only_their_object_where_it_is_seen() {
     let config = latin_hypercube(1, &light.bounds, scene.camera_box.as_ref().unwrap(), 7)[0];
     let block = scene.object_by_name("ShortBlock").unwrap();
     let target = SurfacePoints::new(&scene, block.id);
-    let samples = sample_object(&scene, &geometry, &config, &target, 400, 2, &TraceSettings::default(), 3);
+    let samples =
+        sample_configuration(&scene, &geometry, &config, Aim::At(&target), 400, 2, &TraceSettings::default(), 3);
     // Nothing stands between the camera box and the block: rays aimed at its far side meet
     // its near side first, which is the block too.
     assert_eq!(samples.len(), 400);
@@ -258,5 +259,8 @@ fn aimed_rays_sample_only_their_object_where_it_is_seen() {
         let (to_viewer, normal) = (&s.inputs[3..6], &s.inputs[9..12]);
         assert!(to_viewer.iter().zip(normal).map(|(a, b)| a * b).sum::<f32>() > 0.0, "a face seen from behind");
     }
-    assert_eq!(samples, sample_object(&scene, &geometry, &config, &target, 400, 2, &TraceSettings::default(), 3));
+    assert_eq!(
+        samples,
+        sample_configuration(&scene, &geometry, &config, Aim::At(&target), 400, 2, &TraceSettings::default(), 3)
+    );
 }

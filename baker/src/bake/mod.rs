@@ -27,7 +27,7 @@ use crate::trace::integrator::non_finite_dropped;
 use crate::trace::sampling::{mix64, Rng};
 use crate::trace::{Geometry, TraceSettings};
 use lm::{initial_parameters, Dataset, LmSettings};
-use samples::{latin_hypercube, sample_configuration, sample_object, Sample, SurfacePoints, SAMPLE_BYTES};
+use samples::{latin_hypercube, sample_configuration, Aim, Sample, SurfacePoints, SAMPLE_BYTES};
 use serde::Deserialize;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -249,7 +249,7 @@ pub fn bake(
     let sphere = shards.run("shard", &[], &sampled, |i| {
         let seed = mix64(settings.seed ^ mix64(i as u64 + 1));
         let (rays, paths) = (settings.rays_per_configuration, settings.paths_per_sample);
-        sample_configuration(scene, &geometry, &configs[i], rays, paths, &settings.trace(), seed)
+        sample_configuration(scene, &geometry, &configs[i], Aim::Sphere, rays, paths, &settings.trace(), seed)
     })?;
     let mut counts = vec![0usize; scene.objects.len()];
     sphere.samples.iter().for_each(|s| counts[s.object as usize] += 1);
@@ -268,7 +268,7 @@ pub fn bake(
             let (rays, paths) = (aimed_rays, settings.paths_per_sample);
             let sample = |t: &SurfacePoints| {
                 let seed = mix64(seed ^ u64::from(t.object()));
-                sample_object(scene, &geometry, &configs[i], t, rays, paths, &settings.trace(), seed)
+                sample_configuration(scene, &geometry, &configs[i], Aim::At(t), rays, paths, &settings.trace(), seed)
             };
             aimed.iter().flat_map(sample).collect()
         })?,

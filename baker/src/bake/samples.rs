@@ -53,11 +53,25 @@ pub fn latin_hypercube(n: usize, light: &Aabb, camera: &Aabb, seed: u64) -> Vec<
         .collect()
 }
 
-/// Samples of one configuration; the same arguments always give the same samples.
+/// Where a configuration's rays go.
+#[derive(Clone, Copy)]
+pub enum Aim<'a> {
+    /// Uniformly over the sphere around the viewpoint: every sample where a ray first meets a
+    /// surface.
+    Sphere,
+    /// At points drawn on one object by area, for objects that rays over the sphere rarely
+    /// hit: samples only where that object is what the ray meets first.
+    At(&'a SurfacePoints),
+}
+
+/// Samples of one configuration from `rays` rays aimed as `aim` says; the same arguments
+/// always give the same samples.
+#[allow(clippy::too_many_arguments)]
 pub fn sample_configuration(
     scene: &Scene,
     geometry: &Geometry,
     config: &Configuration,
+    aim: Aim,
     rays: u32,
     paths_per_sample: u32,
     trace: &TraceSettings,
@@ -66,8 +80,17 @@ pub fn sample_configuration(
     let world = World::new(scene, geometry, Some(config.light));
     (0..rays)
         .filter_map(|ray| {
-            let dir = uniform_sphere(Rng::new(seed, u64::from(ray)).next_vec2());
-            sample_along(&world, config, dir, None, paths_per_sample, trace, seed, ray)
+            let mut rng = Rng::new(seed, u64::from(ray));
+            let (dir, only) = match aim {
+                Aim::Sphere => (uniform_sphere(rng.next_vec2()), None),
+                Aim::At(target) => {
+                    ((target.point(&mut rng)? - config.viewpoint).normalize_or_zero(), Some(target.object))
+                }
+            };
+            if dir == Vec3::ZERO {
+                return None;
+            }
+            sample_along(&world, config, dir, only, paths_per_sample, trace, seed, ray)
         })
         .collect()
 }
@@ -108,33 +131,6 @@ impl SurfacePoints {
         let (u, v) = if u + v > 1.0 { (1.0 - u, 1.0 - v) } else { (u, v) };
         Some(a + (b - a) * u + (c - a) * v)
     }
-}
-
-/// Samples of one object from one configuration, for objects that rays over the sphere
-/// rarely hit: `rays` rays aimed at points drawn on the object by area, kept where the object
-/// is what the ray meets first. The same arguments always give the same samples.
-#[allow(clippy::too_many_arguments)]
-pub fn sample_object(
-    scene: &Scene,
-    geometry: &Geometry,
-    config: &Configuration,
-    target: &SurfacePoints,
-    rays: u32,
-    paths_per_sample: u32,
-    trace: &TraceSettings,
-    seed: u64,
-) -> Vec<Sample> {
-    let world = World::new(scene, geometry, Some(config.light));
-    (0..rays)
-        .filter_map(|ray| {
-            let point = target.point(&mut Rng::new(seed, u64::from(ray)))?;
-            let dir = (point - config.viewpoint).normalize_or_zero();
-            if dir == Vec3::ZERO {
-                return None;
-            }
-            sample_along(&world, config, dir, Some(target.object), paths_per_sample, trace, seed, ray)
-        })
-        .collect()
 }
 
 /// The sample at the first surface along `dir` from the viewpoint, if it is a learnable one
