@@ -9,6 +9,7 @@ use clap::Args;
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::{Aabb, Scene};
 use rrf_baker::trace::sampling::uniform_sphere;
+use rrf_baker::trace::world::luminance;
 use rrf_baker::trace::{Geometry, World};
 
 use crate::image_out::write_atomically;
@@ -34,10 +35,6 @@ struct Choice {
     /// Set when the sidecar adds the light (the scene has none).
     added_intensity: Option<Vec3>,
     why: String,
-}
-
-fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
 fn choose_light(scene: &Scene, bounds: &Aabb) -> Choice {
