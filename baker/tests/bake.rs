@@ -59,7 +59,7 @@ fn interrupted_bake_resumes_to_the_same_model() {
 
     // A shard whose bytes were damaged on disk is recomputed, not trusted.
     let damaged_cache = scratch("damaged");
-    for file in cache_files(&full_cache, "shard-") {
+    for file in sample_files(&full_cache) {
         let mut bytes = std::fs::read(&file).unwrap();
         if file.ends_with("shard-00001.bin") {
             let middle = bytes.len() / 2;
@@ -75,7 +75,7 @@ fn interrupted_bake_resumes_to_the_same_model() {
     let networks = cache_files(&full_cache, "network-");
     assert_eq!(networks.len(), full.networks.len(), "one checkpoint per trained network");
     let training_cache = scratch("training");
-    for file in cache_files(&full_cache, "shard-").iter().chain(&networks[..networks.len() / 2]) {
+    for file in sample_files(&full_cache).iter().chain(&networks[..networks.len() / 2]) {
         std::fs::copy(file, training_cache.join(file.file_name().unwrap())).unwrap();
     }
     let (resumed, report) = test_bake(&scene, &training_cache);
@@ -89,6 +89,11 @@ fn interrupted_bake_resumes_to_the_same_model() {
     let other = BakeSettings::new(Quality::Test, 4, &scene);
     let (_, report) = bake(&scene, &other, &partial_cache, &Quiet).unwrap();
     assert_eq!(report.resumed_shards, 0);
+}
+
+/// The sample shards of both sampling passes (rays over the sphere, rays aimed at objects).
+fn sample_files(cache: &Path) -> Vec<PathBuf> {
+    [cache_files(cache, "shard-"), cache_files(cache, "aimed-")].concat()
 }
 
 /// The cache files whose names start with `prefix`, sorted.
