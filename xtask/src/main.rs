@@ -39,7 +39,10 @@ tasks:
   test    install what the tests need (apt-get), then run every test on lavapipe with the
           Vulkan validation layer on
   setup   only install the system packages that the tests need
-  scenes  regenerate the scenes under scenes/ from xtask/src/scenes/";
+  scenes  regenerate the scenes under scenes/ from xtask/src/scenes/
+  validate-gltf
+          check the scenes' glTF with the Khronos glTF validator (installs it with npm into
+          target/gltf-validator/; needs Node.js and npm)";
 
 fn main() -> ExitCode {
     let task = std::env::args().nth(1).unwrap_or_default();
@@ -51,7 +54,8 @@ fn main() -> ExitCode {
             .and_then(|()| cargo(&["run", "--release", "--", "info"]))
             .and_then(|()| cargo(&["test", "--release", "--workspace"])),
         "setup" => install(&[RUN_PACKAGES, TEST_PACKAGES].concat()),
-        "scenes" => scenes::generate(Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap_or(Path::new("."))),
+        "scenes" => scenes::generate(repo_root()),
+        "validate-gltf" => validate_gltf(repo_root()),
         "-h" | "--help" | "help" => {
             println!("{USAGE}");
             Ok(())
@@ -64,6 +68,49 @@ fn main() -> ExitCode {
             eprintln!("xtask: {e}");
             ExitCode::FAILURE
         }
+    }
+}
+
+fn repo_root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().unwrap_or(Path::new("."))
+}
+
+/// The Khronos glTF validator, pinned.
+const GLTF_VALIDATOR: &str = "gltf-validator@2.0.0-dev.3.10";
+
+/// Runs the Khronos glTF validator over every shipped scene: no errors allowed.
+fn validate_gltf(root: &Path) -> Result<(), String> {
+    let prefix = root.join("target/gltf-validator");
+    if !prefix.join("node_modules/gltf-validator").is_dir() {
+        eprintln!("xtask: npm install {GLTF_VALIDATOR} into {}", prefix.display());
+        let status = Command::new("npm")
+            .args(["install", "--no-save", "--no-audit", "--no-fund", "--prefix"])
+            .arg(&prefix)
+            .arg(GLTF_VALIDATOR)
+            .status()
+            .map_err(|e| {
+                format!("cannot run npm ({e}); install Node.js and npm (Debian: apt-get install nodejs npm)")
+            })?;
+        if !status.success() {
+            return Err(format!("npm install {GLTF_VALIDATOR} failed: {status}"));
+        }
+    }
+    let mut files: Vec<_> = std::fs::read_dir(root.join("scenes"))
+        .map_err(|e| format!("scenes/: {e}"))?
+        .filter_map(|e| e.ok().map(|e| e.path().join("scene.gltf")))
+        .filter(|p| p.is_file())
+        .collect();
+    files.sort();
+    let status = Command::new("node")
+        .arg(root.join("xtask/validate_gltf.js"))
+        .args(&files)
+        .env("NODE_PATH", prefix.join("node_modules"))
+        .status()
+        .map_err(|e| format!("cannot run node ({e}); install Node.js"))?;
+    if status.success() {
+        Ok(())
+    } else {
+        Err("the glTF validator found errors (above)".into())
     }
 }
 
