@@ -62,7 +62,7 @@ pub struct BenchArgs {
     /// A named view; default: the glTF camera.
     #[arg(long)]
     pub view: Option<String>,
-    /// Frame size in pixels.
+    /// Frame size in pixels, each side 1 to 16384.
     #[arg(long, default_value = "512x512", value_name = "WxH")]
     pub size: String,
     /// Frames to time (after two warm-up frames), 1 to 100,000.

@@ -43,7 +43,7 @@ pub struct EvalArgs {
     /// 1 to 1,048,576.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub spp: u32,
-    /// Image size in pixels.
+    /// Image size in pixels, each side 1 to 16384.
     #[arg(long, default_value = "256x256", value_name = "WxH")]
     pub size: String,
     /// Seed of the held-out configurations and of the references' paths, any 64-bit integer.

@@ -48,7 +48,7 @@ pub struct ViewArgs {
     /// Where the moving light starts, x,y,z in metres; default: where the glTF puts it.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub light: Option<String>,
-    /// Window size (or frame size when headless) in pixels.
+    /// Window size (or frame size when headless) in pixels, each side 1 to 16384.
     #[arg(long, default_value = "960x540", value_name = "WxH")]
     pub size: String,
     /// How the networks reach the shader (see `rrf render --help`).

@@ -22,7 +22,7 @@ pub struct ViewArgs {
     /// Position of the scene's moving light, x,y,z in metres; default: where the glTF puts it.
     #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
     pub light: Option<String>,
-    /// Image size in pixels.
+    /// Image size in pixels, each side 1 to 16384.
     #[arg(long, default_value = "256x256", value_name = "WxH")]
     pub size: String,
     /// Exposure in stops for PNG output (EXR is always linear), between -20 and 20.
