@@ -22,9 +22,32 @@ fn cornell_box_summary_as_text() {
     let out = rrf(&["info", "scenes/cornell-box"], &[]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
-    for expected in ["8 objects, 36 triangles", "TallBlock", "CeilingLight", "radiance [17.0, 12.0, 4.0]", "front"] {
+    for expected in [
+        "8 objects, 36 triangles",
+        "TallBlock",
+        "CeilingLight",
+        "radiance [17.0, 12.0, 4.0]",
+        "front",
+        "sidecar    scenes/cornell-box/scene.toml\n",
+        "model      scenes/cornell-box/model.safetensors\n",
+    ] {
         assert!(text.contains(expected), "missing {expected:?} in\n{text}");
     }
+}
+
+#[test]
+fn info_says_which_files_are_missing_and_what_makes_them() {
+    let dir = std::env::temp_dir().join(format!("rrf-info-files-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for file in ["scene.gltf", "scene.bin"] {
+        std::fs::copy(format!("scenes/cornell-box/{file}"), dir.join(file)).unwrap();
+    }
+    std::fs::rename(dir.join("scene.gltf"), dir.join("Box.gltf")).unwrap();
+    let out = rrf(&["info", dir.join("Box.gltf").to_str().unwrap()], &[]);
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("Box.toml (not there: `rrf init` writes a starter)"), "{text}");
+    assert!(text.contains("Box.safetensors (not baked yet: `rrf bake`)"), "{text}");
+    std::fs::remove_dir_all(dir).unwrap();
 }
 
 #[test]

@@ -57,6 +57,7 @@ fn scene_info(path: &Path, json: bool) -> Result<()> {
             "scene": scene.name,
             "gltf": scene.gltf_path,
             "sidecar": scene.sidecar_path,
+            "model": scene.model_file(),
             "objects": scene.objects.len(),
             "triangles": scene.triangle_count(),
             "lights": scene.point_lights.len() + area_lights,
@@ -85,6 +86,10 @@ fn scene_info(path: &Path, json: bool) -> Result<()> {
         scene.materials.len(),
         scene.textures.len()
     );
+    let (sidecar, model) = (scene.sidecar_file(), scene.model_file());
+    let state = |path: &Path, missing: &str| if path.is_file() { String::new() } else { format!(" ({missing})") };
+    println!("sidecar    {}{}", sidecar.display(), state(&sidecar, "not there: `rrf init` writes a starter"));
+    println!("model      {}{}", model.display(), state(&model, "not baked yet: `rrf bake`"));
     println!("\n  id  object                 triangles  materials");
     for o in &scene.objects {
         println!("{:>4}  {:<22} {:>9}  {}", o.id, o.name, o.triangles.len(), material_names(o).join(", "));
