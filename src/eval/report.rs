@@ -120,6 +120,25 @@ fn page(r: &Report) -> String {
         row(&mut s, &c.name, &c.metrics);
     }
     s.push_str("</table>\n");
+    s.push_str(
+        "<h2>Yardsticks for the global image</h2>\n<p>Floor: a second reference with independent paths \
+         against the first (below it, error cannot be told from the references' noise). Black and mean \
+         colour: trivial predictions, which a model must beat by far.</p>\n<table>\n\
+         <tr><th>configuration</th><th>model FLIP</th><th>floor FLIP</th><th>black FLIP</th>\
+         <th>mean colour FLIP</th></tr>\n",
+    );
+    let yardsticks = |s: &mut String, name: &str, model: f64, floor: f64, baselines: &Baselines| {
+        let _ = writeln!(
+            s,
+            "<tr><th>{name}</th><td>{model:.4}</td><td>{floor:.4}</td><td>{:.4}</td><td>{:.4}</td></tr>",
+            baselines.black.flip, baselines.mean_colour.flip
+        );
+    };
+    yardsticks(&mut s, "mean", r.mean.gi.flip, r.mean_floor.flip, &r.mean_baselines);
+    for c in &r.configs {
+        yardsticks(&mut s, &c.name, c.metrics.gi.flip, c.floor.flip, &c.baselines);
+    }
+    s.push_str("</table>\n");
     for c in &r.configs {
         let _ = write!(
             s,
