@@ -4,6 +4,7 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
+use rrf_baker::atomic_file::write_atomically;
 use rrf_baker::glam::Vec3;
 use rrf_renderer::tonemap::tonemap;
 
@@ -36,20 +37,6 @@ pub fn check_output(path: &Path) -> Result<ImageKind> {
 pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Vec3], exposure: f32) -> Result<()> {
     let kind = check_output(path)?;
     write_atomically(path, |tmp| write_kind(kind, tmp, width, height, pixels, exposure))
-}
-
-/// Runs `write` on a temporary file beside `path` (same extension, so that encoders that go
-/// by it still work), then renames it to `path`; on failure removes it and leaves `path` as
-/// it was.
-pub fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("tmp");
-    let tmp = path.with_extension(format!("partial.{extension}"));
-    let written = write(&tmp)
-        .and_then(|()| std::fs::rename(&tmp, path).with_context(|| format!("cannot write {}", path.display())));
-    if written.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    written
 }
 
 fn write_kind(kind: ImageKind, path: &Path, width: u32, height: u32, pixels: &[Vec3], exposure: f32) -> Result<()> {

@@ -1,6 +1,7 @@
 //! The offline half of rrf: scene import, the reference path tracer and network training.
 //! No Vulkan here.
 
+pub mod atomic_file;
 pub mod bake;
 pub mod fuzzing;
 pub mod hash;

@@ -16,6 +16,7 @@ use safetensors::tensor::{Dtype, TensorView};
 use safetensors::SafeTensors;
 use serde::{Deserialize, Serialize};
 
+use crate::atomic_file::write_atomically;
 use crate::hash::Fnv64;
 use crate::network::{Component, Network, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
 use crate::scene::Scene;
@@ -84,6 +85,24 @@ pub struct NetworkInfo {
     pub iterations: u32,
 }
 
+impl NetworkInfo {
+    /// The network this describes, with parameters `params`; `None` unless there are 13 input
+    /// ranges of each kind and the parameters of one network.
+    pub fn network(&self, params: Vec<f32>) -> Option<Network> {
+        if self.input_min.len() != INPUTS || self.input_max.len() != INPUTS || params.len() != PARAMETERS {
+            return None;
+        }
+        Some(Network {
+            object: self.object.clone(),
+            component: self.component,
+            input_min: std::array::from_fn(|i| self.input_min[i]),
+            input_max: std::array::from_fn(|i| self.input_max[i]),
+            output_scale: self.output_scale,
+            params,
+        })
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Untrained {
     pub object: String,
@@ -136,13 +155,9 @@ impl Model {
     pub fn save(&self, path: &Path) -> Result<(), ModelError> {
         let fail = |problem: String| ModelError { file: path.to_path_buf(), problem };
         let bytes = self.to_bytes().map_err(fail)?;
-        // Write beside, then rename: an interrupted or failed save (a full disk) never leaves a
-        // broken model, and leaves the model that was there before untouched.
-        let temporary = path.with_extension("safetensors.partial");
-        std::fs::write(&temporary, bytes).and_then(|()| std::fs::rename(&temporary, path)).map_err(|e| {
-            let _ = std::fs::remove_file(&temporary);
-            fail(format!("cannot write: {e}"))
-        })
+        // An interrupted or failed save (a full disk) never leaves a broken model, and leaves
+        // the model that was there before untouched.
+        write_atomically(path, |tmp| std::fs::write(tmp, bytes)).map_err(|e| fail(format!("cannot write: {e}")))
     }
 
     /// Loads and checks a model; with `scene`, also that it was baked from that scene.
@@ -221,14 +236,8 @@ impl Model {
                     params[offset + i] = f32::from_le_bytes([chunk[0], chunk[1], chunk[2], chunk[3]]);
                 }
             }
-            if info.input_min.len() != INPUTS || info.input_max.len() != INPUTS {
-                return Err(format!(
-                    "network {}/{}: input ranges must have 13 entries",
-                    info.object,
-                    info.component.name()
-                ));
-            }
             let name = format!("network {}/{}", info.object, info.component.name());
+            let network = info.network(params).ok_or_else(|| format!("{name}: input ranges must have 13 entries"))?;
             if info.target_transform != "scale" || !(info.output_scale.is_finite() && info.output_scale > 0.0) {
                 return Err(format!("{name}: unknown target transform"));
             }
@@ -236,17 +245,9 @@ impl Model {
             {
                 return Err(format!("{name}: input ranges must be finite with min ≤ max"));
             }
-            if let Some(i) = params.iter().position(|p| !p.is_finite()) {
+            if let Some(i) = network.params.iter().position(|p| !p.is_finite()) {
                 return Err(format!("{name}: parameter {i} is not finite; re-bake the model"));
             }
-            let network = Network {
-                object: info.object.clone(),
-                component: info.component,
-                input_min: std::array::from_fn(|i| info.input_min[i]),
-                input_max: std::array::from_fn(|i| info.input_max[i]),
-                output_scale: info.output_scale,
-                params,
-            };
             hash.write(&tensor_bytes(&network));
             networks.push(network);
         }

@@ -610,17 +610,24 @@ fn light_with_no_area() {
     assert!(message.contains("light.node") && message.contains("no area"), "{message}");
 }
 
+/// `lights` added to a `tiny_gltf` as `KHR_lights_punctual`, light i on a node of its own named
+/// `nodes[i].0` (with the extra node properties `nodes[i].1`), in the scene beside the triangle.
+fn with_lights(gltf: &mut Value, lights: Value, nodes: &[(&str, Value)]) {
+    gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    gltf["extensions"] = json!({ "KHR_lights_punctual": { "lights": lights } });
+    for (light, (name, extra)) in nodes.iter().enumerate() {
+        let mut node = json!({ "name": name, "extensions": { "KHR_lights_punctual": { "light": light } } });
+        node.as_object_mut().unwrap().extend(extra.as_object().unwrap().clone());
+        gltf["nodes"].as_array_mut().unwrap().push(node);
+    }
+    gltf["scenes"][0]["nodes"] = json!((0..=nodes.len()).collect::<Vec<_>>());
+}
+
 #[test]
 fn point_light_that_emits_nothing() {
     let dir = scratch("dark-light");
     let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
-    gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
-    gltf["extensions"] = json!({ "KHR_lights_punctual": { "lights": [{ "type": "point", "intensity": 0.0 }] } });
-    gltf["nodes"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({ "name": "Bulb", "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
-    gltf["scenes"][0]["nodes"] = json!([0, 1]);
+    with_lights(&mut gltf, json!([{ "type": "point", "intensity": 0.0 }]), &[("Bulb", json!({}))]);
     std::fs::write(dir.join("scene.toml"), "[light]\nnode = \"Bulb\"\nmin = [-1, -1, -1]\nmax = [1, 1, 1]\n").unwrap();
     let message = load_err(&write_scene(&dir, &gltf, &bin));
     assert!(message.contains("light.node") && message.contains("emits nothing"), "{message}");
@@ -652,13 +659,7 @@ fn sidecar_box_far_from_the_origin() {
 fn point_light_too_bright_to_sum() {
     let dir = scratch("bright-light");
     let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
-    gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
-    gltf["extensions"] = json!({ "KHR_lights_punctual": { "lights": [{ "type": "point", "intensity": 1e38 }] } });
-    gltf["nodes"]
-        .as_array_mut()
-        .unwrap()
-        .push(json!({ "name": "Sun", "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
-    gltf["scenes"][0]["nodes"] = json!([0, 1]);
+    with_lights(&mut gltf, json!([{ "type": "point", "intensity": 1e38 }]), &[("Sun", json!({}))]);
     let message = load_err(&write_scene(&dir, &gltf, &bin));
     assert!(message.contains("nodes[1] \"Sun\"") && message.contains("intensity"), "{message}");
 }
@@ -733,15 +734,8 @@ fn point_light_intensity_is_candela_unless_the_sidecar_says_otherwise() {
     let make = |test: &str, sidecar: Option<&str>| {
         let dir = scratch(test);
         let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
-        gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
-        gltf["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
-            { "type": "point", "intensity": 1366.0, "color": [1.0, 0.5, 0.25] }
-        ] } });
-        gltf["nodes"]
-            .as_array_mut()
-            .unwrap()
-            .push(json!({ "name": "Bulb", "extensions": { "KHR_lights_punctual": { "light": 0 } } }));
-        gltf["scenes"][0]["nodes"] = json!([0, 1]);
+        let light = json!([{ "type": "point", "intensity": 1366.0, "color": [1.0, 0.5, 0.25] }]);
+        with_lights(&mut gltf, light, &[("Bulb", json!({}))]);
         if let Some(text) = sidecar {
             std::fs::write(dir.join("scene.toml"), text).unwrap();
         }
@@ -759,19 +753,14 @@ fn point_light_intensity_is_candela_unless_the_sidecar_says_otherwise() {
 fn spot_lights_keep_their_cone_and_directional_lights_say_why_they_are_skipped() {
     let dir = scratch("spot");
     let (mut gltf, bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
-    gltf["extensionsUsed"] = json!(["KHR_lights_punctual"]);
-    gltf["extensions"] = json!({ "KHR_lights_punctual": { "lights": [
+    let lights = json!([
         { "type": "spot", "intensity": 683.0, "spot": { "innerConeAngle": 0.2, "outerConeAngle": 0.5 } },
         { "type": "directional", "intensity": 3.0 },
-    ] } });
+    ]);
     // Rotated 90° about x: the node's -z points down (-y).
     let (sin, cos) = (std::f32::consts::FRAC_PI_4.sin(), std::f32::consts::FRAC_PI_4.cos());
-    gltf["nodes"].as_array_mut().unwrap().extend([
-        json!({ "name": "Spot", "rotation": [-sin, 0.0, 0.0, cos], "translation": [0.0, 2.0, 0.0],
-                "extensions": { "KHR_lights_punctual": { "light": 0 } } }),
-        json!({ "name": "Sun", "extensions": { "KHR_lights_punctual": { "light": 1 } } }),
-    ]);
-    gltf["scenes"][0]["nodes"] = json!([0, 1, 2]);
+    let spot = json!({ "rotation": [-sin, 0.0, 0.0, cos], "translation": [0.0, 2.0, 0.0] });
+    with_lights(&mut gltf, lights, &[("Spot", spot), ("Sun", json!({}))]);
     let scene = Scene::load(&write_scene(&dir, &gltf, &bin)).unwrap();
     let spot = &scene.point_lights[0];
     let cone = spot.cone.expect("a spot light has a cone");

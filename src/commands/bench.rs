@@ -87,9 +87,6 @@ pub struct BenchArgs {
 
 pub fn run(args: &BenchArgs) -> Result<()> {
     let (width, height) = super::view_args::parse_size(&args.size)?;
-    if args.frames == 0 {
-        bail!("--frames must be at least 1");
-    }
     let scene = Scene::load(&args.scene)?;
     let model = Model::load(&args.model.clone().unwrap_or_else(|| scene.model_file()), Some(&scene))?;
     let view = super::view_args::named_view(&scene, args.view.as_deref())?;

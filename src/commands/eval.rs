@@ -10,6 +10,7 @@ use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
 use rrf_baker::scene::Scene;
 use rrf_baker::trace::render::RenderSettings;
+use rrf_baker::trace::sampling::mix64;
 use rrf_baker::trace::{Camera, Geometry, TraceSettings, World};
 use rrf_renderer::network_pass::Variant;
 use rrf_renderer::{vk, Context, ContextOptions};
@@ -22,12 +23,11 @@ use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, Config
 use crate::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
 use crate::image_out::tonemap_rgb8;
 use crate::progress::Progress;
-use rrf_baker::trace::sampling::mix64;
 
 const MAX_DEPTH: u32 = 8;
+const RR_DEPTH: u32 = 5;
 /// Separates the second reference's paths (the floor's) from the first's.
 const FLOOR_STREAM: u64 = 0xf100_0000_0000_0001;
-const RR_DEPTH: u32 = 5;
 
 #[derive(Args, Debug)]
 pub struct EvalArgs {
@@ -79,9 +79,6 @@ fn gpu_predictor(scene: &Scene, model: &Model, width: u32, height: u32) -> Resul
 
 pub fn run(args: &EvalArgs) -> Result<()> {
     let (width, height) = super::view_args::parse_size(&args.size)?;
-    if args.spp == 0 {
-        bail!("--spp must be at least 1");
-    }
     let scene = Scene::load(&args.scene)?;
     let model_path = args.model.clone().unwrap_or_else(|| scene.model_file());
     let model = Model::load(&model_path, Some(&scene))?;
@@ -137,12 +134,16 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             let second = RenderSettings { seed: mix64(args.seed ^ FLOOR_STREAM), ..settings };
             let (twin, _) = reference(&scene, &geometry, config, &second, &cache, &|n| progress.inc(n))?;
             progress.finish();
-            let gi = |image: &rrf_baker::trace::RadianceImage| image.pixels.iter().map(|r| r.gi()).collect::<Vec<_>>();
-            let floor = compare(&gi(&twin), &gi(&truth), width, height).metrics;
             let predicted = predict(&predictor, &scene, &geometry, &model, config, width, height)?;
             let figure = format!("{:02}-{}.png", i, config.name);
-            let (metrics, baselines) =
-                evaluate(&predicted, &truth.pixels, width, height, args.spp, &args.output.join(&figure))?;
+            let Scores { metrics, baselines, floor } = evaluate(
+                &predicted,
+                &truth.pixels,
+                &twin.pixels,
+                (width, height),
+                args.spp,
+                &args.output.join(&figure),
+            )?;
             eprintln!(
                 "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4} (floor {:.4}; black {:.4}, mean colour {:.4}){}",
                 config.name,
@@ -249,16 +250,24 @@ fn predict(
     }
 }
 
-/// Metrics per component and the trivial predictions' metrics of the global image, and the
-/// configuration's figure written to `figure`.
+/// What one configuration scores: per component, and the global image's yardsticks.
+struct Scores {
+    metrics: ComponentMetrics,
+    baselines: Baselines,
+    /// The second reference (`twin`) against the first.
+    floor: Metrics,
+}
+
+/// The configuration's scores against the reference `truth`, with `twin` (a second reference
+/// of independent paths) for the floor, and its figure written to `figure`.
 fn evaluate(
     p: &Predicted,
     truth: &[rrf_baker::trace::Radiance],
-    width: u32,
-    height: u32,
+    twin: &[rrf_baker::trace::Radiance],
+    (width, height): (u32, u32),
     spp: u32,
     figure: &std::path::Path,
-) -> Result<(ComponentMetrics, Baselines)> {
+) -> Result<Scores> {
     let pick = |f: fn(&rrf_baker::trace::Radiance) -> Vec3| truth.iter().map(f).collect::<Vec<Vec3>>();
     let (true_direct, true_indirect, true_gi) = (pick(|r| r.direct), pick(|r| r.indirect), pick(|r| r.gi()));
     let gi = compare(&p.gi, &true_gi, width, height);
@@ -277,5 +286,10 @@ fn evaluate(
     compose(&panels, &gi.flip_map, width, height, &footer)
         .save(figure)
         .with_context(|| format!("cannot write {}", figure.display()))?;
-    Ok((metrics, Baselines::of(&true_gi, width, height)))
+    let twin_gi: Vec<Vec3> = twin.iter().map(|r| r.gi()).collect();
+    Ok(Scores {
+        metrics,
+        baselines: Baselines::of(&true_gi, width, height),
+        floor: compare(&twin_gi, &true_gi, width, height).metrics,
+    })
 }

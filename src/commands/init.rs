@@ -6,13 +6,12 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
+use rrf_baker::atomic_file::write_atomically;
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::{Aabb, Scene};
 use rrf_baker::trace::sampling::uniform_sphere;
 use rrf_baker::trace::world::luminance;
 use rrf_baker::trace::{Geometry, World};
-
-use crate::image_out::write_atomically;
 
 #[derive(Args, Debug)]
 pub struct InitArgs {
@@ -53,15 +52,10 @@ fn choose_light(scene: &Scene, bounds: &Aabb) -> Choice {
         };
     }
     let power = |o: &rrf_baker::scene::Object| -> f32 {
-        let mut total = 0.0;
-        for part in &o.parts {
-            let emission = luminance(scene.materials[part.material as usize].emission);
-            for t in &o.triangles[part.triangles.start as usize..part.triangles.end as usize] {
-                let [a, b, c] = t.map(|i| o.positions[i as usize]);
-                total += emission * 0.5 * (b - a).cross(c - a).length();
-            }
-        }
-        total
+        o.parts
+            .iter()
+            .map(|p| luminance(scene.materials[p.material as usize].emission) * o.area(p.triangles.clone()))
+            .sum()
     };
     let emitters: Vec<_> = scene.area_lights().collect();
     if let Some(emitter) = emitters.iter().max_by(|a, b| power(a).total_cmp(&power(b))) {

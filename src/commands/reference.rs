@@ -44,9 +44,6 @@ pub struct ReferenceArgs {
 pub fn run(args: &ReferenceArgs) -> Result<()> {
     let (width, height) = args.view.size()?;
     check_output(&args.output)?;
-    if args.spp == 0 {
-        anyhow::bail!("--spp must be at least 1");
-    }
     let scene = Scene::load(&args.view.scene)?;
     for warning in &scene.warnings {
         eprintln!("warning: {warning}");

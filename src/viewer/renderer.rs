@@ -18,7 +18,7 @@ use rrf_renderer::{vk, Context, Image};
 use super::state::ViewerState;
 use crate::frame_stats::Stats;
 use crate::gpu_frame::{FrameOutput, GpuFrame, TIMESTAMPS};
-use crate::image_out::write_atomically;
+use rrf_baker::atomic_file::write_atomically;
 
 /// A window's surface and its swapchain, remade when the window's size changes.
 pub struct Presenter {

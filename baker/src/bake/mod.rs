@@ -327,8 +327,8 @@ pub fn bake(
         };
         return Err(BakeError::NoNetworks { scene: scene.gltf_path.clone(), cause });
     }
-    let trained = std::sync::atomic::AtomicU64::new(0);
-    let resumed_networks = std::sync::atomic::AtomicUsize::new(0);
+    let trained = AtomicU64::new(0);
+    let resumed_networks = AtomicUsize::new(0);
     let settings_key = serde_json::to_string(settings).expect("settings serialise");
     let networks: Vec<(Network, NetworkInfo)> = jobs
         .par_iter()
@@ -339,32 +339,14 @@ pub fn bake(
             key.write(&[component as u8]);
             key.write(&object.to_le_bytes());
             let path = cache.join(format!("network-{object:05}-{}.bin", component.name()));
-            let checkpoint = match cache::read(&path, NETWORK_MAGIC, key.0) {
-                cache::Cached::Found(bytes) => match serde_json::from_slice::<Checkpoint>(&bytes) {
-                    Ok(c) if c.params.len() == crate::network::PARAMETERS => Some(c),
-                    _ => {
-                        corrupt.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                        None
-                    }
-                },
-                cache::Cached::Corrupt => {
-                    corrupt.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                    None
-                }
-                cache::Cached::Missing => None,
-            };
+            let checkpoint = cache::read(&path, NETWORK_MAGIC, key.0, &corrupt, |bytes| {
+                let Checkpoint { info, params } = serde_json::from_slice(bytes).ok()?;
+                Some((info.network(params)?, info))
+            });
             let (network, info) = match checkpoint {
-                Some(Checkpoint { info, params }) => {
-                    resumed_networks.fetch_add(1, std::sync::atomic::Ordering::SeqCst);
-                    let network = Network {
-                        object: info.object.clone(),
-                        component,
-                        input_min: std::array::from_fn(|i| info.input_min[i]),
-                        input_max: std::array::from_fn(|i| info.input_max[i]),
-                        output_scale: info.output_scale,
-                        params,
-                    };
-                    (network, info)
+                Some(resumed) => {
+                    resumed_networks.fetch_add(1, Ordering::SeqCst);
+                    resumed
                 }
                 None => {
                     let (network, info) =
@@ -375,7 +357,7 @@ pub fn bake(
                     (Network { params: checkpoint.params, ..network }, checkpoint.info)
                 }
             };
-            let d = trained.fetch_add(1, std::sync::atomic::Ordering::SeqCst) + 1;
+            let d = trained.fetch_add(1, Ordering::SeqCst) + 1;
             progress.trained(d, jobs.len() as u64);
             Ok((network, info))
         })
@@ -464,16 +446,11 @@ impl Shards<'_> {
                 key.write(pass);
                 key.write(&(shard as u64).to_le_bytes());
                 let path = self.cache.join(format!("{name}-{shard:05}.bin"));
-                match cache::read(&path, SHARD_MAGIC, key.0) {
-                    cache::Cached::Found(bytes) => match samples::decode(&bytes, self.objects) {
-                        Some(samples) => {
-                            done(range.len());
-                            return Ok((samples, true));
-                        }
-                        None => _ = self.corrupt.fetch_add(1, Ordering::SeqCst),
-                    },
-                    cache::Cached::Corrupt => _ = self.corrupt.fetch_add(1, Ordering::SeqCst),
-                    cache::Cached::Missing => {}
+                if let Some(samples) =
+                    cache::read(&path, SHARD_MAGIC, key.0, self.corrupt, |b| samples::decode(b, self.objects))
+                {
+                    done(range.len());
+                    return Ok((samples, true));
                 }
                 let mut samples = Vec::new();
                 for i in range {

@@ -19,6 +19,14 @@ fn describe(element: &str, problem: &str) -> String {
     }
 }
 
+/// How errors name a glTF element: `nodes[3] "Lamp"`, or `nodes[3]` when it has no name.
+pub(super) fn element_name(kind: &str, index: usize, name: Option<&str>) -> String {
+    match name {
+        Some(name) => format!("{kind}[{index}] {name:?}"),
+        None => format!("{kind}[{index}]"),
+    }
+}
+
 impl SceneError {
     pub fn new(file: &Path, element: impl Into<String>, problem: impl Into<String>) -> Self {
         Self { file: file.to_path_buf(), element: element.into(), problem: problem.into() }

@@ -10,7 +10,7 @@ use std::path::{Component, Path, PathBuf};
 use gltf::buffer::Data as BufferData;
 use gltf::image::Data as ImageData;
 
-use super::error::SceneError;
+use super::error::{element_name, SceneError};
 
 /// Largest texture side, in texels (what every Vulkan device supports for 2D images).
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
@@ -55,13 +55,6 @@ fn percent_decode(uri: &str) -> Option<String> {
     String::from_utf8(out).ok()
 }
 
-fn describe(kind: &str, index: usize, name: Option<&str>) -> String {
-    match name {
-        Some(name) => format!("{kind}[{index}] {name:?}"),
-        None => format!("{kind}[{index}]"),
-    }
-}
-
 /// Loads every buffer, the GLB's binary chunk for the one without a URI.
 pub fn load_buffers(
     file: &Path,
@@ -71,7 +64,7 @@ pub fn load_buffers(
 ) -> Result<Vec<BufferData>, SceneError> {
     let mut buffers = Vec::new();
     for buffer in document.buffers() {
-        let element = describe("buffers", buffer.index(), buffer.name());
+        let element = element_name("buffers", buffer.index(), buffer.name());
         let err = |problem: String| SceneError::new(file, &element, problem);
         if let gltf::buffer::Source::Uri(uri) = buffer.source() {
             if let Target::File(path) = resolve(uri, base).map_err(err)? {
@@ -99,7 +92,7 @@ pub fn load_images(
 ) -> Result<Vec<ImageData>, SceneError> {
     let mut images = Vec::new();
     for image in document.images() {
-        let element = describe("images", image.index(), image.name());
+        let element = element_name("images", image.index(), image.name());
         let err = |problem: String| SceneError::new(file, &element, problem);
         let source = match image.source() {
             gltf::image::Source::Uri { uri, .. } => {

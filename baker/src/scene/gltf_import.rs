@@ -13,18 +13,14 @@ use gltf::buffer::Data as BufferData;
 use gltf::mesh::Mode;
 
 use super::content_hash::content_hash;
-use super::error::SceneError;
+use super::error::{element_name, SceneError};
 use super::external;
 use super::sidecar::{Aabb, Sidecar};
 use super::texture::{ColorSpace, Texture};
 use super::{
     Cone, LightKind, Material, MovingLight, Object, Part, PointLight, PointLightUnits, Scene, View, CANDELA_PER_WATT,
-    MAX_COORDINATE,
+    MAX_COORDINATE, MAX_EMISSION,
 };
-
-/// Largest `KHR_materials_emissive_strength` and point-light intensity: far above the sun's
-/// disc, far below where sums of radiance overflow f32.
-const MAX_EMISSION: f32 = 1e9;
 
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] =
@@ -109,7 +105,7 @@ pub(super) fn import(
     let mut stack: Vec<(gltf::Node, Mat4)> =
         gltf_scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect::<Vec<_>>().into_iter().rev().collect();
     while let Some((node, parent)) = stack.pop() {
-        let element = node_element(&node);
+        let element = element_name("nodes", node.index(), node.name());
         if !visited.insert(node.index()) {
             return Err(err(&element, "is reachable twice; the node hierarchy must be a tree".into()));
         }
@@ -333,13 +329,6 @@ fn check_before_validation(root: &gltf::json::Root) -> Result<(), (String, Strin
     Ok(())
 }
 
-fn node_element(node: &gltf::Node) -> String {
-    match node.name() {
-        Some(name) => format!("nodes[{}] {name:?}", node.index()),
-        None => format!("nodes[{}]", node.index()),
-    }
-}
-
 /// The default view from a perspective camera's world transform; the camera looks down its
 /// local -z with +y up.
 fn camera_view(world: &Mat4, yfov: f32) -> Result<View, String> {
@@ -391,11 +380,7 @@ fn emitting_area(object: &Object, materials: &[Material]) -> f32 {
         .parts
         .iter()
         .filter(|p| materials[p.material as usize].is_emissive())
-        .flat_map(|p| &object.triangles[p.triangles.start as usize..p.triangles.end as usize])
-        .map(|t| {
-            let [a, b, c] = t.map(|i| object.positions[i as usize]);
-            0.5 * (b - a).cross(c - a).length()
-        })
+        .map(|p| object.area(p.triangles.clone()))
         .sum()
 }
 
@@ -414,35 +399,26 @@ impl Importer<'_> {
     fn material(&mut self, m: &gltf::Material) -> Result<Material, SceneError> {
         let index = m.index().unwrap_or(0);
         let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("materials[{index}]"));
-        let element = match m.name() {
-            Some(n) => format!("materials[{index}] {n:?}"),
-            None => format!("materials[{index}]"),
-        };
+        let element = element_name("materials", index, m.name());
         let pbr = m.pbr_metallic_roughness();
         let [r, g, b, _alpha] = pbr.base_color_factor();
-        let unit = |v: f32| (0.0..=1.0).contains(&v);
-        let checks = [
-            ("baseColorFactor", [r, g, b].into_iter().all(unit)),
-            ("metallicFactor", unit(pbr.metallic_factor())),
-            ("roughnessFactor", unit(pbr.roughness_factor())),
-            ("emissiveFactor", m.emissive_factor().into_iter().all(unit)),
-            ("emissiveStrength", m.emissive_strength().is_none_or(|s| (0.0..=MAX_EMISSION).contains(&s))),
-            ("specularFactor", m.specular().is_none_or(|s| unit(s.specular_factor()))),
+        // Each factor's values, and the largest glTF allows (the least is 0).
+        let factors: [(&str, Vec<f32>, f32); 6] = [
+            ("baseColorFactor", vec![r, g, b], 1.0),
+            ("metallicFactor", vec![pbr.metallic_factor()], 1.0),
+            ("roughnessFactor", vec![pbr.roughness_factor()], 1.0),
+            ("emissiveFactor", m.emissive_factor().to_vec(), 1.0),
+            ("emissiveStrength", m.emissive_strength().into_iter().collect(), MAX_EMISSION),
+            ("specularFactor", m.specular().map(|s| s.specular_factor()).into_iter().collect(), 1.0),
         ];
-        if let Some((key, _)) = checks.iter().find(|(_, ok)| !ok) {
-            let value = match *key {
-                "baseColorFactor" => format!("{:?}", [r, g, b]),
-                "metallicFactor" => pbr.metallic_factor().to_string(),
-                "roughnessFactor" => pbr.roughness_factor().to_string(),
-                "emissiveFactor" => format!("{:?}", m.emissive_factor()),
-                "emissiveStrength" => format!("{:?}", m.emissive_strength()),
-                _ => format!("{:?}", m.specular().map(|s| s.specular_factor())),
+        if let Some((key, values, max)) = factors.iter().find(|(_, v, max)| !v.iter().all(|x| (0.0..=*max).contains(x)))
+        {
+            let shown = match values[..] {
+                [value] => value.to_string(),
+                _ => format!("{values:?}"),
             };
-            let range = match *key {
-                "emissiveStrength" => format!("between 0 and {MAX_EMISSION:e}"),
-                _ => "between 0 and 1".into(),
-            };
-            return Err(SceneError::new(self.file, element, format!("{key} {value} must be {range}")));
+            let max = if *max == 1.0 { "1".to_string() } else { format!("{max:e}") };
+            return Err(SceneError::new(self.file, element, format!("{key} {shown} must be between 0 and {max}")));
         }
         let base_color_texture = pbr.base_color_texture().map(|t| self.texture(&name, &t, ColorSpace::Srgb));
         let metallic_roughness_texture =
@@ -514,10 +490,7 @@ impl Importer<'_> {
             parts: vec![],
         };
         for prim in mesh.primitives() {
-            let element = match mesh.name() {
-                Some(n) => format!("meshes[{}] {n:?} primitives[{}]", mesh.index(), prim.index()),
-                None => format!("meshes[{}] primitives[{}]", mesh.index(), prim.index()),
-            };
+            let element = format!("{} primitives[{}]", element_name("meshes", mesh.index(), mesh.name()), prim.index());
             if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
                 *skipped += 1;
                 continue;

@@ -35,6 +35,11 @@ pub use texture::{ColorSpace, Texture};
 /// views), in metres: a thousand kilometres. Beyond it, areas and BVH costs overflow f32.
 pub const MAX_COORDINATE: f32 = 1.0e6;
 
+/// Largest emissive strength (`KHR_materials_emissive_strength`) and point-light intensity
+/// (W/sr) a scene may give: far above the sun's disc, far below where sums of radiance
+/// overflow f32.
+pub const MAX_EMISSION: f32 = 1e9;
+
 /// File names looked for in a scene folder.
 pub const GLTF_NAMES: [&str; 2] = ["scene.gltf", "scene.glb"];
 
@@ -79,6 +84,19 @@ pub struct Object {
     pub triangles: Vec<[u32; 3]>,
     /// Runs of triangles that share a material, one per glTF primitive.
     pub parts: Vec<Part>,
+}
+
+impl Object {
+    /// The total area of the triangles in `triangles` (a part's range, say), in m².
+    pub fn area(&self, triangles: Range<u32>) -> f32 {
+        self.triangles[triangles.start as usize..triangles.end as usize]
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| self.positions[i as usize]);
+                0.5 * (b - a).cross(c - a).length()
+            })
+            .sum()
+    }
 }
 
 #[derive(Clone, Debug)]

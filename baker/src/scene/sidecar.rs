@@ -31,7 +31,7 @@ use glam::Vec3;
 use serde::Deserialize;
 
 use super::error::SceneError;
-use super::MAX_COORDINATE;
+use super::{MAX_COORDINATE, MAX_EMISSION};
 
 #[derive(Clone, Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -169,14 +169,14 @@ impl Sidecar {
     fn check(&self, file: &Path) -> Result<(), SceneError> {
         if let Some(light) = &self.light {
             check_box(file, "light", light.min, light.max)?;
-            if let Some(intensity) = light.intensity {
-                if !intensity.iter().all(|v| (0.0..=1e9).contains(v)) || intensity.iter().all(|&v| v == 0.0) {
-                    return Err(SceneError::new(
-                        file,
-                        "light.intensity",
-                        "must lie between 0 and 1e9 W/sr per channel, and not all 0",
-                    ));
-                }
+            // A light of zero intensity is refused where the moving light is resolved, as a
+            // glTF light of zero intensity is.
+            if light.intensity.is_some_and(|i| !i.iter().all(|v| (0.0..=MAX_EMISSION).contains(v))) {
+                return Err(SceneError::new(
+                    file,
+                    "light.intensity",
+                    format!("must lie between 0 and {MAX_EMISSION:e} W/sr per channel"),
+                ));
             }
         }
         if let Some(camera) = &self.camera {
