@@ -56,8 +56,12 @@ pub fn held_out(scene: &Scene, geometry: &Geometry, random: usize, seed: u64) ->
             let jitter = Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32()) - 0.5;
             let candidate = centre + jitter * extent * 0.5;
             let dir = (candidate - eye).normalize_or_zero();
+            // Alpha masks count as solid here: a view target need not see through foliage.
+            let solid = |_, _| true;
             let deep = dir != Vec3::ZERO
-                && geometry.intersect(eye, dir, f32::INFINITY, &[]).is_none_or(|hit| hit.t >= MIN_DEPTH * diagonal);
+                && geometry
+                    .intersect(eye, dir, f32::INFINITY, &[], &solid)
+                    .is_none_or(|hit| hit.t >= MIN_DEPTH * diagonal);
             if deep {
                 target = candidate;
                 break;

@@ -403,7 +403,7 @@ const AIMED_STREAM: u64 = 0xa1e5_0000_0000_0001;
 
 /// Whether `object` gets networks: every object but pure emitters, which show their emission.
 fn learns(scene: &Scene, object: u32) -> bool {
-    scene.objects[object as usize].parts.iter().any(|p| !scene.materials[p.material as usize].is_emissive())
+    scene.objects[object as usize].parts.iter().any(|p| !scene.materials[p.material as usize].is_plain_emitter())
 }
 
 /// The samples of one sampling pass, and how many of its shards came from the cache.

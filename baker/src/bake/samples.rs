@@ -152,7 +152,7 @@ fn sample_along(
     let material = &world.scene.materials[world.geometry.triangles[hit.triangle as usize].material as usize];
     // Emitters show their emission and learn nothing; the inside of a closed one-sided
     // surface is never seen.
-    if material.is_emissive() || (!si.front_face && !material.double_sided) || only.is_some_and(|o| o != si.object) {
+    if material.is_plain_emitter() || (!si.front_face && !material.double_sided) || only.is_some_and(|o| o != si.object) {
         return None;
     }
     let mut sum = Radiance::default();

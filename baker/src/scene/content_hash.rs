@@ -7,7 +7,7 @@
 
 use glam::Vec3;
 
-use super::{LightKind, Scene};
+use super::{AlphaMode, LightKind, Scene, UvTransform};
 use crate::hash::Fnv64;
 
 struct Writer(Fnv64);
@@ -48,13 +48,35 @@ pub(super) fn content_hash(scene: &Scene) -> u64 {
                 w.u64(u64::from(v));
             }
         }
+        // Tangents shape samples only through normal maps (and came with them).
+        if o.parts.iter().any(|p| scene.materials[p.material as usize].normal_texture.is_some()) {
+            w.f32s(o.tangents.iter().flat_map(|t| t.to_array()));
+        }
     }
     w.u64(scene.materials.len() as u64);
     for m in &scene.materials {
         w.vec3s([&m.base_color, &m.emission]);
         w.f32s([m.metallic, m.roughness, m.specular, f32::from(u8::from(m.double_sided))]);
         for texture in [m.base_color_texture, m.metallic_roughness_texture] {
-            w.u64(texture.map_or(u64::MAX, u64::from));
+            w.u64(texture.map_or(u64::MAX, |t| u64::from(t.texture)));
+        }
+        // Texture transforms, normal maps, emissive textures and alpha masks came later: they
+        // are written only where a material uses them, so that older scenes keep their hash
+        // and their models.
+        let textures = [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture.map(|n| n.0), m.emissive_texture];
+        let transformed = textures.iter().flatten().any(|t| t.transform != UvTransform::IDENTITY);
+        let cutoff = match m.alpha_mode {
+            AlphaMode::Opaque => None,
+            AlphaMode::Mask { cutoff } => Some(cutoff),
+        };
+        if transformed || m.normal_texture.is_some() || m.emissive_texture.is_some() || cutoff.is_some() {
+            w.bytes(b"material features");
+            for texture in textures {
+                w.u64(texture.map_or(u64::MAX, |t| u64::from(t.texture)));
+                let t = texture.map_or(UvTransform::IDENTITY, |t| t.transform);
+                w.f32s(t.matrix.into_iter().chain(t.offset.to_array()));
+            }
+            w.f32s([m.normal_texture.map_or(0.0, |n| n.1), m.alpha, cutoff.unwrap_or(-1.0)]);
         }
     }
     w.u64(scene.textures.len() as u64);

@@ -8,7 +8,7 @@
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::buffer::Data as BufferData;
 use gltf::mesh::Mode;
 
@@ -16,15 +16,15 @@ use super::content_hash::content_hash;
 use super::error::{element_name, SceneError};
 use super::external;
 use super::sidecar::{Aabb, Sidecar};
-use super::texture::{ColorSpace, Texture};
+use super::texture::{ColorSpace, Texture, TextureRef, UvTransform};
 use super::{
-    Cone, LightKind, Material, MovingLight, Object, Part, PointLight, PointLightUnits, Scene, View, CANDELA_PER_WATT,
+    AlphaMode, Cone, LightKind, Material, MovingLight, Object, Part, PointLight, PointLightUnits, Scene, View, CANDELA_PER_WATT,
     MAX_COORDINATE, MAX_EMISSION,
 };
 
 /// Extensions a file may list in `extensionsRequired`.
 const SUPPORTED_EXTENSIONS: &[&str] =
-    &["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular"];
+    &["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular", "KHR_texture_transform"];
 
 /// Imports the glTF or GLB `bytes` of `file`; external files resolve against `file`'s folder.
 pub(super) fn import(
@@ -75,7 +75,7 @@ pub(super) fn import(
         textures: Vec::new(),
         texture_ids: HashMap::new(),
     };
-    let mut materials: Vec<Material> = document.materials().map(|m| importer.material(&m)).collect::<Result<_, _>>()?;
+    let mut materials: Vec<Material> = document.materials().map(|m| importer.material(&m, document.as_json())).collect::<Result<_, _>>()?;
     let default_material = materials.len() as u32;
     let uses_default = document.meshes().flat_map(|m| m.primitives()).any(|p| p.material().index().is_none());
     // glTF's default material, for primitives without one: white, fully metallic, fully rough.
@@ -83,13 +83,17 @@ pub(super) fn import(
         materials.push(Material {
             name: "default".into(),
             base_color: Vec3::ONE,
+            alpha: 1.0,
             base_color_texture: None,
             metallic: 1.0,
             roughness: 1.0,
             metallic_roughness_texture: None,
+            normal_texture: None,
             emission: Vec3::ZERO,
+            emissive_texture: None,
             specular: 1.0,
             double_sided: false,
+            alpha_mode: AlphaMode::Opaque,
         });
     }
 
@@ -396,12 +400,12 @@ struct Importer<'a> {
 impl Importer<'_> {
     /// The material, with every factor checked against the range glTF gives it: values
     /// outside would make negative or non-finite radiance.
-    fn material(&mut self, m: &gltf::Material) -> Result<Material, SceneError> {
+    fn material(&mut self, m: &gltf::Material, json: &gltf::json::Root) -> Result<Material, SceneError> {
         let index = m.index().unwrap_or(0);
         let name = m.name().map(str::to_owned).unwrap_or_else(|| format!("materials[{index}]"));
         let element = element_name("materials", index, m.name());
         let pbr = m.pbr_metallic_roughness();
-        let [r, g, b, _alpha] = pbr.base_color_factor();
+        let [r, g, b, alpha] = pbr.base_color_factor();
         // Each factor's values, and the largest glTF allows (the least is 0).
         let factors: [(&str, Vec<f32>, f32); 6] = [
             ("baseColorFactor", vec![r, g, b], 1.0),
@@ -420,31 +424,73 @@ impl Importer<'_> {
             let max = if *max == 1.0 { "1".to_string() } else { format!("{max:e}") };
             return Err(SceneError::new(self.file, element, format!("{key} {shown} must be between 0 and {max}")));
         }
-        let base_color_texture = pbr.base_color_texture().map(|t| self.texture(&name, &t, ColorSpace::Srgb));
-        let metallic_roughness_texture =
-            pbr.metallic_roughness_texture().map(|t| self.texture(&name, &t, ColorSpace::Linear));
-        if m.emissive_texture().is_some() {
-            self.warnings.push(format!("material {name:?}: emissive texture ignored (the factor is used)"));
-        }
+        let mut texture = |info: gltf::texture::Info, space| {
+            let transform = info.texture_transform().map(|t| (t.offset(), t.rotation(), t.scale(), t.tex_coord()));
+            self.texture(&name, info.texture(), info.tex_coord(), transform, space)
+        };
+        let base_color_texture = pbr.base_color_texture().map(|t| texture(t, ColorSpace::Srgb));
+        let metallic_roughness_texture = pbr.metallic_roughness_texture().map(|t| texture(t, ColorSpace::Linear));
+        let emissive_texture = m.emissive_texture().map(|t| texture(t, ColorSpace::Srgb));
+        // gltf 1.4 gives no texture transform for normal textures: it is read from the JSON.
+        let normal_texture = match m.normal_texture() {
+            Some(t) => {
+                let transform = normal_texture_transform(json, index).map_err(|e| {
+                    SceneError::new(self.file, &element, format!("normalTexture KHR_texture_transform: {e}"))
+                })?;
+                Some((self.texture(&name, t.texture(), t.tex_coord(), transform, ColorSpace::Linear), t.scale()))
+            }
+            None => None,
+        };
+        let alpha_mode = match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => AlphaMode::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5) },
+            gltf::material::AlphaMode::Blend => {
+                self.warnings.push(format!(
+                    "{element}: alphaMode BLEND is drawn opaque (rrf has no transparency; MASK cuts out)"
+                ));
+                AlphaMode::Opaque
+            }
+        };
         Ok(Material {
             base_color: Vec3::new(r, g, b),
+            alpha,
             base_color_texture,
             metallic: pbr.metallic_factor(),
             roughness: pbr.roughness_factor(),
             metallic_roughness_texture,
+            normal_texture,
             emission: Vec3::from(m.emissive_factor()) * m.emissive_strength().unwrap_or(1.0),
+            emissive_texture,
             specular: m.specular().map_or(1.0, |s| s.specular_factor()),
             double_sided: m.double_sided(),
+            alpha_mode,
             name,
         })
     }
 
-    fn texture(&mut self, material: &str, info: &gltf::texture::Info, space: ColorSpace) -> u32 {
-        if info.tex_coord() != 0 {
-            self.warnings
-                .push(format!("material {material:?}: texture uses TEXCOORD_{}; UV0 is used", info.tex_coord()));
+    /// The texture of `texture` in colour space `space` (decoded once per image and space),
+    /// used through UV set `tex_coord` and the `KHR_texture_transform` values (offset,
+    /// rotation, scale, texCoord override).
+    fn texture(
+        &mut self,
+        material: &str,
+        texture: gltf::Texture,
+        tex_coord: u32,
+        transform: Option<([f32; 2], f32, [f32; 2], Option<u32>)>,
+        space: ColorSpace,
+    ) -> TextureRef {
+        let tex_coord = transform.and_then(|t| t.3).unwrap_or(tex_coord);
+        if tex_coord != 0 {
+            self.warnings.push(format!("material {material:?}: texture uses TEXCOORD_{tex_coord}; UV0 is used"));
         }
-        let image = info.texture().source().index();
+        let transform = transform.map_or(UvTransform::IDENTITY, |(offset, rotation, scale, _)| {
+            UvTransform::new(offset, rotation, scale)
+        });
+        TextureRef { texture: self.decoded(texture.source().index(), space), transform }
+    }
+
+    /// The index of image `image` decoded for colour space `space`.
+    fn decoded(&mut self, image: usize, space: ColorSpace) -> u32 {
         if let Some(&id) = self.texture_ids.get(&(image, space)) {
             return id;
         }
@@ -486,6 +532,7 @@ impl Importer<'_> {
             positions: vec![],
             normals: vec![],
             uvs: vec![],
+            tangents: vec![],
             triangles: vec![],
             parts: vec![],
         };
@@ -501,6 +548,7 @@ impl Importer<'_> {
                     gltf::Semantic::Positions => Role::Position,
                     gltf::Semantic::Normals => Role::Normal,
                     gltf::Semantic::TexCoords(0) => Role::TexCoord,
+                    gltf::Semantic::Tangents => Role::Tangent,
                     _ => continue,
                 };
                 self.check_accessor(&accessor, role)?;
@@ -550,6 +598,15 @@ impl Importer<'_> {
                 triangles.iter_mut().for_each(|t| t.swap(1, 2));
             }
             let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+            // glTF tangents only go with glTF normals; flat-shaded primitives derive theirs.
+            let tangents: Option<Vec<Vec4>> = reader.read_tangents().filter(|_| normals.is_some()).map(|t| {
+                let to_world = Mat3::from_mat4(world);
+                let handedness = if flip { -1.0 } else { 1.0 };
+                t.map(|[x, y, z, w]| {
+                    (to_world * Vec3::new(x, y, z)).normalize_or(Vec3::X).extend(if w < 0.0 { -1.0 } else { 1.0 } * handedness)
+                })
+                .collect()
+            });
             let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
                 Some(t) => t.into_f32().map(Vec2::from).collect(),
                 None => vec![Vec2::ZERO; local.len()],
@@ -569,11 +626,13 @@ impl Importer<'_> {
 
             let base = object.positions.len() as u32;
             let first = object.triangles.len() as u32;
+            let has_tangents = tangents.is_some();
             match normals {
                 Some(normals) => {
                     object.positions.extend(&positions);
                     object.normals.extend(normals.iter().map(|&n| (normal_matrix * n).normalize_or(Vec3::Y)));
                     object.uvs.extend(&uvs);
+                    object.tangents.extend(tangents.into_iter().flatten());
                     object.triangles.extend(triangles.iter().map(|t| t.map(|i| base + i)));
                 }
                 // glTF: without normals, flat normals. Each triangle gets its own vertices.
@@ -588,6 +647,9 @@ impl Importer<'_> {
                         object.triangles.push([v, v + 1, v + 2]);
                     }
                 }
+            }
+            if !has_tangents {
+                derive_tangents(&mut object, base as usize, first as usize);
             }
             let material = prim.material().index().map_or(default_material, |i| i as u32);
             object.parts.push(Part { material, triangles: first..object.triangles.len() as u32 });
@@ -608,6 +670,7 @@ impl Importer<'_> {
             Role::TexCoord => {
                 dimensions == D::Vec2 && (kind == T::F32 || (matches!(kind, T::U8 | T::U16) && normalized))
             }
+            Role::Tangent => dimensions == D::Vec4 && kind == T::F32,
             Role::Indices => dimensions == D::Scalar && matches!(kind, T::U8 | T::U16 | T::U32) && !normalized,
         };
         if !allowed {
@@ -658,12 +721,60 @@ impl Importer<'_> {
     }
 }
 
+/// Tangents for the vertices from `first_vertex` on, from the UV gradients of the triangles
+/// from `first_triangle` on (Lengyel's method: per-triangle tangents summed at each vertex,
+/// then made orthogonal to its normal). Where UVs do not vary, any tangent will do.
+fn derive_tangents(object: &mut Object, first_vertex: usize, first_triangle: usize) {
+    let count = object.positions.len() - first_vertex;
+    let (mut t_sum, mut b_sum) = (vec![Vec3::ZERO; count], vec![Vec3::ZERO; count]);
+    for triangle in &object.triangles[first_triangle..] {
+        let [a, b, c] = triangle.map(|i| i as usize);
+        let (e1, e2) = (object.positions[b] - object.positions[a], object.positions[c] - object.positions[a]);
+        let (d1, d2) = (object.uvs[b] - object.uvs[a], object.uvs[c] - object.uvs[a]);
+        let det = d1.x * d2.y - d2.x * d1.y;
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let t = (e1 * d2.y - e2 * d1.y) / det;
+        let bt = (e2 * d1.x - e1 * d2.x) / det;
+        for v in [a, b, c] {
+            t_sum[v - first_vertex] += t;
+            b_sum[v - first_vertex] += bt;
+        }
+    }
+    for (i, (t, b)) in t_sum.into_iter().zip(b_sum).enumerate() {
+        let n = object.normals[first_vertex + i];
+        let tangent = (t - n * n.dot(t)).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector());
+        let w = if n.cross(tangent).dot(b) < 0.0 { -1.0 } else { 1.0 };
+        object.tangents.push(tangent.extend(w));
+    }
+}
+
+/// The `KHR_texture_transform` (offset, rotation, scale, texCoord) of material `index`'s normal
+/// texture, if it has one.
+#[allow(clippy::type_complexity)]
+fn normal_texture_transform(
+    json: &gltf::json::Root,
+    index: usize,
+) -> Result<Option<([f32; 2], f32, [f32; 2], Option<u32>)>, serde_json::Error> {
+    let extension = json
+        .materials
+        .get(index)
+        .and_then(|m| m.normal_texture.as_ref())
+        .and_then(|t| t.extensions.as_ref())
+        .and_then(|e| e.others.get("KHR_texture_transform"));
+    let Some(value) = extension else { return Ok(None) };
+    let t: gltf::json::extensions::texture::TextureTransform = serde_json::from_value(value.clone())?;
+    Ok(Some((t.offset.0, t.rotation.0, t.scale.0, t.tex_coord)))
+}
+
 /// What an accessor is read as.
 #[derive(Clone, Copy)]
 enum Role {
     Position,
     Normal,
     TexCoord,
+    Tangent,
     Indices,
 }
 
@@ -673,6 +784,7 @@ impl Role {
             Role::Position => "POSITION",
             Role::Normal => "NORMAL",
             Role::TexCoord => "TEXCOORD_0",
+            Role::Tangent => "TANGENT",
             Role::Indices => "indices",
         }
     }

@@ -21,7 +21,7 @@ mod texture;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 pub use error::SceneError;
 pub use sidecar::{Aabb, BakeOverrides, BakePresets, PointLightUnits, Sidecar, Units, ViewSpec};
@@ -29,7 +29,7 @@ pub use sidecar::{Aabb, BakeOverrides, BakePresets, PointLightUnits, Sidecar, Un
 /// Candela per W/sr: the luminous efficacy of 555 nm light, which rrf applies to every channel
 /// of a glTF point light's intensity.
 pub const CANDELA_PER_WATT: f32 = 683.0;
-pub use texture::{ColorSpace, Texture};
+pub use texture::{ColorSpace, Texture, TextureRef, UvTransform};
 
 /// Largest distance from the origin, per axis, of anything in a scene (vertices, boxes,
 /// views), in metres: a thousand kilometres. Beyond it, areas and BVH costs overflow f32.
@@ -80,6 +80,9 @@ pub struct Object {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
+    /// World-space tangents (xyz) and the bitangent's sign (w, bitangent = w · normal ×
+    /// tangent): glTF's TANGENT, or derived from the UVs when a primitive has none.
+    pub tangents: Vec<Vec4>,
     /// Counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
     /// Runs of triangles that share a material, one per glTF primitive.
@@ -110,22 +113,89 @@ pub struct Material {
     pub name: String,
     /// Linear RGB base colour factor.
     pub base_color: Vec3,
-    pub base_color_texture: Option<u32>,
+    /// The base colour factor's alpha: coverage, for [`AlphaMode::Mask`].
+    pub alpha: f32,
+    pub base_color_texture: Option<TextureRef>,
     pub metallic: f32,
     pub roughness: f32,
     /// Roughness in G, metalness in B, as glTF says; multiplies the factors.
-    pub metallic_roughness_texture: Option<u32>,
-    /// Emitted radiance (linear RGB).
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// Tangent-space normals and glTF's `scale` of their x and y.
+    pub normal_texture: Option<(TextureRef, f32)>,
+    /// Emitted radiance (linear RGB), before the emissive texture.
     pub emission: Vec3,
+    /// Multiplies `emission` where the surface is.
+    pub emissive_texture: Option<TextureRef>,
     /// `KHR_materials_specular` factor (1 without the extension): scales the dielectric
     /// specular lobe; 0 leaves pure Lambert diffuse.
     pub specular: f32,
     pub double_sided: bool,
+    pub alpha_mode: AlphaMode,
+}
+
+/// glTF's `alphaMode`, as rrf draws it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    /// Every surface point is solid (also `BLEND`, with an import warning).
+    Opaque,
+    /// Points whose alpha is below the cutoff are not there: rays pass, pixels are discarded.
+    Mask { cutoff: f32 },
+}
+
+/// A material's values at one surface point: factors times textures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shading {
+    pub base_color: Vec3,
+    pub alpha: f32,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Emitted radiance, on the side(s) the material emits from.
+    pub emission: Vec3,
+    /// The normal map's tangent-space normal, scaled, not normalized; `None` without one.
+    pub tangent_normal: Option<Vec3>,
 }
 
 impl Material {
+    /// Whether the material emits anywhere: its surfaces are area lights.
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
+    }
+
+    /// Whether the material is a plain light: emissive and untextured emission. Such surfaces
+    /// show their emission and learn nothing; a textured emitter (a lamp's decal, a screen)
+    /// also reflects, so it gets networks like any surface.
+    pub fn is_plain_emitter(&self) -> bool {
+        self.is_emissive() && self.emissive_texture.is_none()
+    }
+
+    /// Whether the surface point at `uv` is there at all (alpha mask).
+    pub fn covers(&self, textures: &[Texture], uv: Vec2) -> bool {
+        match self.alpha_mode {
+            AlphaMode::Opaque => true,
+            AlphaMode::Mask { cutoff } => {
+                let texture = self.base_color_texture.map_or(1.0, |t| t.sample(textures, uv).w);
+                self.alpha * texture >= cutoff
+            }
+        }
+    }
+
+    /// The material at `uv`; the GPU's twin is `material_at` in `gbuffer.frag`.
+    pub fn shading(&self, textures: &[Texture], uv: Vec2) -> Shading {
+        let base = self.base_color_texture.map_or(Vec4::ONE, |t| t.sample(textures, uv));
+        let mr = self.metallic_roughness_texture.map_or(Vec4::ONE, |t| t.sample(textures, uv));
+        let emissive = self.emissive_texture.map_or(Vec3::ONE, |t| t.sample(textures, uv).truncate());
+        let tangent_normal = self.normal_texture.map(|(t, scale)| {
+            let n = t.sample(textures, uv).truncate() * 2.0 - Vec3::ONE;
+            Vec3::new(n.x * scale, n.y * scale, n.z)
+        });
+        Shading {
+            base_color: self.base_color * base.truncate(),
+            alpha: self.alpha * base.w,
+            metallic: self.metallic * mr.z,
+            roughness: self.roughness * mr.y,
+            emission: self.emission * emissive,
+            tangent_normal,
+        }
     }
 }
 

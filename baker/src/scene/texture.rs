@@ -50,3 +50,62 @@ impl Texture {
         top.lerp(bottom, fy)
     }
 }
+
+/// `KHR_texture_transform` of a texture's UVs, as the affine map `uv ↦ M·uv + offset` with
+/// `M = R(rotation)·S(scale)`; the identity without the extension. `R` is `[cos sin; −sin cos]`:
+/// counter-clockwise in glTF's v-down UV space, as the sample model `TextureTransformTest`,
+/// three.js and Babylon have it (the extension's GLSL listing has the sign the other way,
+/// KhronosGroup/glTF#1563).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    /// Row-major 2×2 matrix.
+    pub matrix: [f32; 4],
+    pub offset: Vec2,
+}
+
+impl UvTransform {
+    pub const IDENTITY: UvTransform = UvTransform { matrix: [1.0, 0.0, 0.0, 1.0], offset: Vec2::ZERO };
+
+    /// The extension's `offset`, `rotation` (radians) and `scale`, composed as it says:
+    /// translation · rotation · scale.
+    pub fn new(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Self {
+        let (s, c) = rotation.sin_cos();
+        UvTransform { matrix: [c * scale[0], s * scale[1], -s * scale[0], c * scale[1]], offset: Vec2::from(offset) }
+    }
+
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        let m = &self.matrix;
+        Vec2::new(m[0] * uv.x + m[1] * uv.y, m[2] * uv.x + m[3] * uv.y) + self.offset
+    }
+}
+
+/// A material's use of a texture: which one, and how its UVs are transformed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TextureRef {
+    /// Index into [`crate::scene::Scene::textures`].
+    pub texture: u32,
+    pub transform: UvTransform,
+}
+
+impl TextureRef {
+    pub fn sample(&self, textures: &[Texture], uv: Vec2) -> Vec4 {
+        textures[self.texture as usize].sample(self.transform.apply(uv))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uv_transform_follows_the_extension() {
+        // The extension's example: rotate a quarter turn, then scale and offset.
+        let t = UvTransform::new([0.5, 0.25], std::f32::consts::FRAC_PI_2, [2.0, 3.0]);
+        // (1, 0) scaled to (2, 0), rotated by [c s; -s c] to (0, -2), then offset.
+        let p = t.apply(Vec2::new(1.0, 0.0));
+        assert!((p - Vec2::new(0.5, -1.75)).length() < 1e-6, "{p}");
+        let q = t.apply(Vec2::new(0.0, 1.0));
+        assert!((q - Vec2::new(3.5, 0.25)).length() < 1e-6, "{q}");
+        assert_eq!(UvTransform::IDENTITY.apply(Vec2::new(0.3, 0.7)), Vec2::new(0.3, 0.7));
+    }
+}

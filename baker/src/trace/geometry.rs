@@ -3,7 +3,7 @@
 //! The moving area light, if there is one, stays out of the BVH: it is a handful of
 //! triangles tested directly, so moving it never rebuilds the BVH.
 
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec2, Vec3, Vec3A, Vec4};
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
@@ -11,7 +11,7 @@ use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
-use crate::scene::{LightKind, Scene};
+use crate::scene::{AlphaMode, LightKind, Scene};
 
 /// A triangle's vertices (indices into the global vertex arrays), object and material.
 #[derive(Clone, Copy, Debug)]
@@ -21,6 +21,8 @@ pub struct TriangleInfo {
     pub material: u32,
     /// Part of the moving area light (outside the BVH, moved with the light).
     pub moving: bool,
+    /// Its material is alpha-masked: a hit counts only where the mask covers it.
+    pub masked: bool,
 }
 
 pub struct Geometry {
@@ -35,9 +37,14 @@ pub struct Geometry {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
+    pub tangents: Vec<Vec4>,
     /// Triangle ids of the moving area light, not in the BVH.
     pub moving: Vec<u32>,
 }
+
+/// The alpha test: whether masked triangle `triangle` is there at distance `t` along the ray
+/// being traced.
+pub type Covers<'a> = &'a dyn Fn(u32, f32) -> bool;
 
 /// The closest intersection along a ray.
 #[derive(Clone, Copy, Debug)]
@@ -60,6 +67,7 @@ impl Geometry {
             positions: Vec::new(),
             normals: Vec::new(),
             uvs: Vec::new(),
+            tangents: Vec::new(),
             moving: Vec::new(),
         };
         for object in &scene.objects {
@@ -67,6 +75,7 @@ impl Geometry {
             g.positions.extend(&object.positions);
             g.normals.extend(&object.normals);
             g.uvs.extend(&object.uvs);
+            g.tangents.extend(&object.tangents);
             for part in &object.parts {
                 for t in part.triangles.clone() {
                     let id = g.triangles.len() as u32;
@@ -79,6 +88,7 @@ impl Geometry {
                         object: object.id,
                         material: part.material,
                         moving,
+                        masked: scene.materials[part.material as usize].alpha_mode != AlphaMode::Opaque,
                     });
                 }
             }
@@ -117,19 +127,39 @@ impl Geometry {
             .collect()
     }
 
-    /// Closest hit in `[tmin, tmax]` against the BVH and the moved light triangles.
-    pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[(u32, RtTriangle)]) -> Option<Hit> {
+    /// `t` if the ray meets `triangle` there and, for a masked triangle, `covers(triangle, t)`
+    /// says the surface is there; else infinity.
+    fn test(&self, triangle: u32, t: f32, covers: Covers) -> f32 {
+        if t < f32::INFINITY && self.triangles[triangle as usize].masked && !covers(triangle, t) {
+            f32::INFINITY
+        } else {
+            t
+        }
+    }
+
+    /// Closest hit in `[tmin, tmax]` against the BVH and the moved light triangles; a masked
+    /// triangle is hit only where `covers` says so (see [`Covers`]).
+    pub fn intersect(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+        moved: &[(u32, RtTriangle)],
+        covers: Covers,
+    ) -> Option<Hit> {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
         let mut hit = RayHit::none();
         let mut best: Option<Hit> = None;
         if !self.bvh_triangles.is_empty()
-            && self.bvh.ray_traverse(ray, &mut hit, |r, i| self.bvh_triangles[i].intersect(r))
+            && self.bvh.ray_traverse(ray, &mut hit, |r, i| {
+                self.test(self.bvh_ids[i], self.bvh_triangles[i].intersect(r), covers)
+            })
         {
             best = Some(Hit { t: hit.t, triangle: self.bvh_ids[hit.primitive_id as usize] });
         }
         for (id, tri) in moved {
             let limit = best.map_or(tmax, |h| h.t);
-            let t = tri.intersect(&Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, limit));
+            let t = self.test(*id, tri.intersect(&Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, limit)), covers);
             if t < limit {
                 best = Some(Hit { t, triangle: *id });
             }
@@ -138,12 +168,13 @@ impl Geometry {
     }
 
     /// Whether anything lies between `origin` and `origin + dir · tmax`.
-    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[(u32, RtTriangle)]) -> bool {
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[(u32, RtTriangle)], covers: Covers) -> bool {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
-        if !self.bvh_triangles.is_empty() && !self.bvh.ray_traverse_miss(ray, |r, i| self.bvh_triangles[i].intersect(r))
+        if !self.bvh_triangles.is_empty()
+            && !self.bvh.ray_traverse_miss(ray, |r, i| self.test(self.bvh_ids[i], self.bvh_triangles[i].intersect(r), covers))
         {
             return true;
         }
-        moved.iter().any(|(_, tri)| tri.intersect(&ray) < tmax)
+        moved.iter().any(|(id, tri)| self.test(*id, tri.intersect(&ray), covers) < tmax)
     }
 }

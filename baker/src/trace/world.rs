@@ -1,21 +1,24 @@
 //! One light configuration of a scene: the geometry with the moving light in place, the
 //! emitters to sample, and surface interactions at hits.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use obvhs::rt_triangle::RtTriangle;
 
 use super::bsdf::Bsdf;
 use super::geometry::{Geometry, Hit};
 use super::sampling::uniform_triangle;
-use crate::scene::{Cone, LightKind, Scene};
+use crate::scene::{Cone, LightKind, Scene, TextureRef};
 
 /// An emissive triangle where this configuration puts it, with the probability of choosing
 /// it for next-event estimation.
 #[derive(Clone, Copy, Debug)]
 struct Emitter {
     corners: [Vec3; 3],
+    uvs: [Vec2; 3],
     normal: Vec3,
+    /// The material's emission, times its emissive texture at the sampled point.
     emission: Vec3,
+    texture: Option<TextureRef>,
     double_sided: bool,
     area: f32,
     /// Probability of choosing this emitter, proportional to its power.
@@ -95,8 +98,8 @@ impl<'a> World<'a> {
         let mut emitter_of_triangle = vec![NO_EMITTER; geometry.triangles.len()];
         let mut total = 0.0;
         for (id, info) in geometry.triangles.iter().enumerate() {
-            let emission = scene.materials[info.material as usize].emission;
-            if emission.max_element() <= 0.0 {
+            let material = &scene.materials[info.material as usize];
+            if !material.is_emissive() {
                 continue;
             }
             let corners = geometry.corners(id as u32, light_offset);
@@ -106,13 +109,17 @@ impl<'a> World<'a> {
             if area <= 0.0 {
                 continue;
             }
-            let power = luminance(emission) * area;
+            let uvs = info.vertices.map(|v| geometry.uvs[v as usize]);
+            let texture = material.emissive_texture;
+            let power = luminance(material.emission) * area * texture.map_or(1.0, |t| textured_share(scene, t, uvs));
             emitter_of_triangle[id] = emitters.len() as u32;
             emitters.push(Emitter {
                 corners,
+                uvs,
                 normal: cross.normalize(),
-                emission,
-                double_sided: scene.materials[info.material as usize].double_sided,
+                emission: material.emission,
+                texture,
+                double_sided: material.double_sided,
                 area,
                 probability: power,
             });
@@ -138,11 +145,21 @@ impl<'a> World<'a> {
     }
 
     pub fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<Hit> {
-        self.geometry.intersect(origin, dir, f32::INFINITY, &self.moved)
+        let covers = |triangle, t| self.covers(triangle, origin + dir * t);
+        self.geometry.intersect(origin, dir, f32::INFINITY, &self.moved, &covers)
     }
 
     pub fn occluded(&self, origin: Vec3, dir: Vec3, distance: f32) -> bool {
-        self.geometry.occluded(origin, dir, distance, &self.moved)
+        let covers = |triangle, t| self.covers(triangle, origin + dir * t);
+        self.geometry.occluded(origin, dir, distance, &self.moved, &covers)
+    }
+
+    /// The alpha test of `triangle` at `point`, a point on it.
+    fn covers(&self, triangle: u32, point: Vec3) -> bool {
+        let info = &self.geometry.triangles[triangle as usize];
+        let b = barycentrics(self.geometry.corners(triangle, self.light_offset), point);
+        let uv = interpolate(info.vertices.map(|v| self.geometry.uvs[v as usize]), b);
+        self.scene.materials[info.material as usize].covers(&self.scene.textures, uv)
     }
 
     pub fn has_area_lights(&self) -> bool {
@@ -154,23 +171,20 @@ impl<'a> World<'a> {
         let g = self.geometry;
         let info = g.triangles[hit.triangle as usize];
         let [p0, p1, p2] = g.corners(hit.triangle, self.light_offset);
-        let p = origin + dir * hit.t;
-        // Barycentric coordinates of p.
-        let (e1, e2, ep) = (p1 - p0, p2 - p0, p - p0);
-        let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-        let (dp1, dp2) = (ep.dot(e1), ep.dot(e2));
-        let denom = d11 * d22 - d12 * d12;
-        let (b1, b2) = if denom > 0.0 {
-            (((d22 * dp1 - d12 * dp2) / denom).clamp(0.0, 1.0), ((d11 * dp2 - d12 * dp1) / denom).clamp(0.0, 1.0))
-        } else {
-            (0.0, 0.0)
+        let b = barycentrics([p0, p1, p2], origin + dir * hit.t);
+        let position = interpolate([p0, p1, p2], b);
+        let uv = interpolate(info.vertices.map(|v| g.uvs[v as usize]), b);
+        let material = &self.scene.materials[info.material as usize];
+        let shading = material.shading(&self.scene.textures, uv);
+        let mut ng = (p1 - p0).cross(p2 - p0).normalize_or(Vec3::Z);
+        let interpolated = interpolate(info.vertices.map(|v| g.normals[v as usize]), b).normalize_or(ng);
+        let mut ns = match shading.tangent_normal {
+            Some(m) => {
+                let tangent = interpolate(info.vertices.map(|v| g.tangents[v as usize]), b);
+                normal_mapped(interpolated, tangent, m)
+            }
+            None => interpolated,
         };
-        let b0 = (1.0 - b1 - b2).max(0.0);
-        let [i0, i1, i2] = info.vertices.map(|v| v as usize);
-        let position = p0 * b0 + p1 * b1 + p2 * b2;
-        let uv = g.uvs[i0] * b0 + g.uvs[i1] * b1 + g.uvs[i2] * b2;
-        let mut ng = e1.cross(e2).normalize_or(Vec3::Z);
-        let mut ns = (g.normals[i0] * b0 + g.normals[i1] * b1 + g.normals[i2] * b2).normalize_or(ng);
         let front_face = ng.dot(dir) < 0.0;
         if !front_face {
             ng = -ng;
@@ -178,29 +192,17 @@ impl<'a> World<'a> {
         if ns.dot(ng) < 0.0 {
             ns = -ns;
         }
-
-        let material = &self.scene.materials[info.material as usize];
-        let mut base = material.base_color;
-        if let Some(t) = material.base_color_texture {
-            base *= self.scene.textures[t as usize].sample(uv).truncate();
-        }
-        let (mut metallic, mut roughness) = (material.metallic, material.roughness);
-        if let Some(t) = material.metallic_roughness_texture {
-            let mr = self.scene.textures[t as usize].sample(uv);
-            roughness *= mr.y;
-            metallic *= mr.z;
-        }
         let emits = front_face || material.double_sided;
         Interaction {
             position,
             geometric_normal: ng,
             shading_normal: ns,
             front_face,
-            bsdf: Bsdf::new(base, metallic, roughness, material.specular),
-            emission: if emits { material.emission } else { Vec3::ZERO },
+            bsdf: Bsdf::new(shading.base_color, shading.metallic, shading.roughness, material.specular),
+            emission: if emits { shading.emission } else { Vec3::ZERO },
             object: info.object,
             uv,
-            roughness,
+            roughness: shading.roughness,
         }
     }
 
@@ -214,7 +216,8 @@ impl<'a> World<'a> {
         let e = &self.emitters[index];
         let [a, b, c] = e.corners;
         let bary = uniform_triangle(u);
-        let point = a * (1.0 - bary.x - bary.y) + b * bary.x + c * bary.y;
+        let weights = Vec3::new(1.0 - bary.x - bary.y, bary.x, bary.y);
+        let point = interpolate([a, b, c], weights);
         let to_light = point - from;
         let distance2 = to_light.length_squared();
         let distance = distance2.sqrt();
@@ -224,7 +227,8 @@ impl<'a> World<'a> {
             return None;
         }
         let pdf = e.probability / e.area * distance2 / cos_light.abs();
-        Some(LightSample { direction, distance, radiance: e.emission, pdf: Some(pdf) })
+        let texture = e.texture.map_or(Vec3::ONE, |t| t.sample(&self.scene.textures, interpolate(e.uvs, weights)).truncate());
+        Some(LightSample { direction, distance, radiance: e.emission * texture, pdf: Some(pdf) })
     }
 
     /// Solid-angle density with which [`World::sample_area_light`] would have produced the
@@ -241,6 +245,51 @@ impl<'a> World<'a> {
         }
         e.probability / e.area * t * t / cos_light
     }
+}
+
+/// Barycentric coordinates (of the corners in order) of `p`, a point in the triangle's plane,
+/// clamped into the triangle.
+fn barycentrics([p0, p1, p2]: [Vec3; 3], p: Vec3) -> Vec3 {
+    let (e1, e2, ep) = (p1 - p0, p2 - p0, p - p0);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (dp1, dp2) = (ep.dot(e1), ep.dot(e2));
+    let denom = d11 * d22 - d12 * d12;
+    let (b1, b2) = if denom > 0.0 {
+        (((d22 * dp1 - d12 * dp2) / denom).clamp(0.0, 1.0), ((d11 * dp2 - d12 * dp1) / denom).clamp(0.0, 1.0))
+    } else {
+        (0.0, 0.0)
+    };
+    Vec3::new((1.0 - b1 - b2).max(0.0), b1, b2)
+}
+
+fn interpolate<T>(values: [T; 3], b: Vec3) -> T
+where
+    T: std::ops::Mul<f32, Output = T> + std::ops::Add<Output = T> + Copy,
+{
+    values[0] * b.x + values[1] * b.y + values[2] * b.z
+}
+
+/// The shading normal that normal map value `m` (tangent space, scaled) gives on a surface of
+/// interpolated `normal` and `tangent` (xyz, and the bitangent's sign in w), as glTF says.
+/// The GPU's twin is in `gbuffer.frag`.
+pub fn normal_mapped(normal: Vec3, tangent: Vec4, m: Vec3) -> Vec3 {
+    let t = (tangent.truncate() - normal * normal.dot(tangent.truncate())).normalize_or(normal.any_orthonormal_vector());
+    let b = normal.cross(t) * if tangent.w < 0.0 { -1.0 } else { 1.0 };
+    (t * m.x + b * m.y + normal * m.z).normalize_or(normal)
+}
+
+/// The mean luminance of emissive texture `t` over a triangle of corner UVs `uvs`, from 16
+/// fixed points, with a floor of 1/64 so that no part of a textured emitter is never sampled
+/// (which would bias the estimate where the points missed a bright texel).
+fn textured_share(scene: &Scene, t: TextureRef, uvs: [Vec2; 3]) -> f32 {
+    let mut sum = 0.0;
+    for i in 0..16 {
+        let u = Vec2::new((i % 4) as f32 + 0.5, (i / 4) as f32 + 0.5) / 4.0;
+        let b = uniform_triangle(u);
+        let uv = interpolate(uvs, Vec3::new(1.0 - b.x - b.y, b.x, b.y));
+        sum += luminance(t.sample(&scene.textures, uv).truncate());
+    }
+    (sum / 16.0).max(1.0 / 64.0)
 }
 
 pub fn luminance(c: Vec3) -> f32 {
