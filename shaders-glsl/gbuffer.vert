@@ -6,6 +6,8 @@ layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
 layout(location = 2) in uint in_object;
 layout(location = 3) in uint in_material;
+layout(location = 4) in vec2 in_uv;
+layout(location = 5) in vec4 in_tangent;
 
 layout(push_constant) uniform Frame {
     mat4 view_projection;
@@ -18,6 +20,8 @@ layout(location = 0) out vec3 out_position;
 layout(location = 1) out vec3 out_normal;
 layout(location = 2) flat out uint out_object;
 layout(location = 3) flat out uint out_material;
+layout(location = 4) out vec2 out_uv;
+layout(location = 5) out vec4 out_tangent;
 
 void main() {
     vec3 position = in_position + (in_object + 1u == frame.light_object ? frame.light_offset.xyz : vec3(0.0));
@@ -25,5 +29,7 @@ void main() {
     out_normal = in_normal;
     out_object = in_object;
     out_material = in_material;
+    out_uv = in_uv;
+    out_tangent = in_tangent;
     gl_Position = frame.view_projection * vec4(position, 1.0);
 }

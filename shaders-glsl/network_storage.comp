@@ -8,11 +8,11 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-// Bindings 0-2 (G-buffer, materials): network_inputs.glsl.
-layout(binding = 3) readonly buffer Weights { float weights[]; };
-layout(binding = 4, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 5, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 6, rgba32f) uniform writeonly image2D out_gi;
+// Bindings 0-3 (G-buffer, materials): network_inputs.glsl.
+layout(binding = 4) readonly buffer Weights { float weights[]; };
+layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
 
 layout(push_constant) uniform Constants {
     vec4 eye;
@@ -28,7 +28,7 @@ void main() {
     }
     uint id = imageLoad(gbuffer_id, pixel).r;
     uint object = id_object(id);
-    vec3 emission = object > 0u ? surface_emission(id) : vec3(0.0);
+    vec3 emission = object > 0u ? surface_emission(pixel, id) : vec3(0.0);
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
     if (object > 0u) {

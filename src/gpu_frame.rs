@@ -20,7 +20,7 @@ use rrf_renderer::sync::{run_passes, Pass, Resource, ResourceStates};
 use rrf_renderer::tonemap::TonemapPass;
 use rrf_renderer::{vk, Context, Destroy, Image};
 
-use crate::gpu_scene::{gbuffer_constants, gbuffer_materials, gbuffer_mesh, moving_light_object};
+use crate::gpu_scene::{gbuffer_constants, gbuffer_mesh, moving_light_object, network_materials, surface_materials};
 use crate::shaders;
 
 /// Each object's networks, by object id; `None` for objects the model has none for.
@@ -144,8 +144,9 @@ impl GpuFrame {
         // Each part is destroyed again if a later one cannot be made.
         let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
         let (vertices, indices) = gbuffer_mesh(scene);
-        let mesh = ctx.guard(GBufferMesh::new(ctx, &vertices, &indices)?);
-        let gbuffer = ctx.guard(GBufferPass::new(ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG)?);
+        let (surfaces, texels) = surface_materials(scene);
+        let mesh = ctx.guard(GBufferMesh::new(ctx, &vertices, &indices, &surfaces, &texels)?);
+        let gbuffer = ctx.guard(GBufferPass::new(ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG, &mesh)?);
         let network_shaders = NetworkShaders {
             storage: shaders::NETWORK_STORAGE_COMP,
             classify: shaders::NETWORK_CLASSIFY_COMP,
@@ -156,7 +157,7 @@ impl GpuFrame {
         let objects = object_networks(scene, model);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
         let display = (output == FrameOutput::Display && variant != Variant::Storage).then_some(&*ldr);
-        let materials = gbuffer_materials(scene);
+        let materials = network_materials(scene);
         let network =
             ctx.guard(NetworkPass::new(ctx, variant, &network_shaders, &targets, &objects, &materials, display)?);
         let mut tonemaps = ctx.guard(Vec::with_capacity(3));
@@ -326,7 +327,7 @@ impl GpuFrame {
     /// Object ids + 1 of the last frame's pixels (0: nothing).
     pub fn read_objects(&self, ctx: &Context) -> Result<Vec<u32>> {
         let ids = self.read_back(ctx, &[&self.targets.id], None)?.remove(0);
-        Ok(ids.iter().map(|&v| GBufferTexel::decode([0; 4], v.to_bits()).object).collect())
+        Ok(ids.iter().map(|&v| GBufferTexel::decode([0; 4], v.to_bits(), [0; 4]).object).collect())
     }
 
     /// Reads `images` back (as `Context::decode` gives them), after rendering a frame of

@@ -2,8 +2,8 @@
 //! camera matches the path tracer's ([`rrf_baker::trace::Camera`]) pixel for pixel.
 
 use rrf_baker::glam::{Mat4, Vec3, Vec4};
-use rrf_baker::scene::{LightKind, Scene, View};
-use rrf_renderer::gbuffer::{GBufferConstants, GBufferVertex};
+use rrf_baker::scene::{self, AlphaMode, ColorSpace, LightKind, Scene, View};
+use rrf_renderer::gbuffer::{GBufferConstants, GBufferVertex, SurfaceMaterial, TextureRef};
 
 /// The object id of the moving light's own geometry (an area light), if it has any.
 pub fn moving_light_object(scene: &Scene) -> Option<u32> {
@@ -32,6 +32,8 @@ pub fn gbuffer_mesh(scene: &Scene) -> (Vec<GBufferVertex>, Vec<u32>) {
                         vertices.push(GBufferVertex {
                             position: object.positions[v as usize].to_array(),
                             normal: object.normals[v as usize].to_array(),
+                            uv: object.uvs[v as usize].to_array(),
+                            tangent: object.tangents[v as usize].to_array(),
                             object: object.id,
                             material: part.material,
                         });
@@ -44,9 +46,61 @@ pub fn gbuffer_mesh(scene: &Scene) -> (Vec<GBufferVertex>, Vec<u32>) {
     (vertices, indices)
 }
 
-/// Each material's emitted radiance (rgb) and roughness, as the network pass reads them.
-pub fn gbuffer_materials(scene: &Scene) -> Vec<[f32; 4]> {
-    scene.materials.iter().map(|m| m.emission.extend(m.roughness).to_array()).collect()
+/// Each material's emitted radiance (rgb, before its emissive texture), as the network pass
+/// reads them.
+pub fn network_materials(scene: &Scene) -> Vec<[f32; 4]> {
+    scene.materials.iter().map(|m| m.emission.extend(0.0).to_array()).collect()
+}
+
+/// The materials as the G-buffer pass reads them, and every texture's texels after one another
+/// (RGBA8 in a word, r in the low byte). Textures of more than [`TextureRef::MAX_SIDE`] texels
+/// a side cannot be told to the GPU; the importer allows no more than 16384.
+pub fn surface_materials(scene: &Scene) -> (Vec<SurfaceMaterial>, Vec<u32>) {
+    let mut first_texel = Vec::with_capacity(scene.textures.len());
+    let mut texels = Vec::new();
+    for t in &scene.textures {
+        first_texel.push(texels.len() as u32);
+        texels.extend(t.texels.iter().map(|&rgba| u32::from_le_bytes(rgba)));
+    }
+    let texture = |r: Option<scene::TextureRef>| match r {
+        None => TextureRef::default(),
+        Some(r) => {
+            let t = &scene.textures[r.texture as usize];
+            let srgb = if t.color_space == ColorSpace::Srgb { TextureRef::SRGB } else { 0 };
+            TextureRef {
+                matrix: r.transform.matrix,
+                offset: r.transform.offset.to_array(),
+                first_texel: first_texel[r.texture as usize],
+                shape: t.width.min(TextureRef::MAX_SIDE)
+                    | t.height.min(TextureRef::MAX_SIDE) << 15
+                    | srgb
+                    | TextureRef::PRESENT,
+            }
+        }
+    };
+    let materials = scene
+        .materials
+        .iter()
+        .map(|m| SurfaceMaterial {
+            base_color: m.base_color.extend(m.alpha).to_array(),
+            factors: [
+                m.metallic,
+                m.roughness,
+                m.normal_texture.map_or(1.0, |n| n.1),
+                match m.alpha_mode {
+                    AlphaMode::Opaque => -1.0,
+                    AlphaMode::Mask { cutoff } => cutoff,
+                },
+            ],
+            textures: [
+                texture(m.base_color_texture),
+                texture(m.metallic_roughness_texture),
+                texture(m.normal_texture.map(|n| n.0)),
+                texture(m.emissive_texture),
+            ],
+        })
+        .collect();
+    (materials, texels)
 }
 
 /// The G-buffer pass's constants: the view-projection into Vulkan clip space (y down, depth

@@ -1,34 +1,15 @@
-//! Compute pipelines of one shader with one descriptor set whose resources are bound once, at
-//! creation.
-//!
-//! Every pass in rrf works on images of a fixed size, so its resources are known when it is
-//! built; binding them then keeps per-frame recording free of descriptor updates. A pass can
-//! hold several pipelines of the same shader that differ only in specialization constants.
+//! Compute pipelines of one shader with one descriptor set bound at creation
+//! ([`crate::descriptors`]). A pass can hold several pipelines of the same shader that differ
+//! only in specialization constants.
 
 use ash::vk;
 
 use crate::context::Context;
 use crate::error::{Result, VkContext};
 use crate::guard::Destroy;
-use crate::resources::{Buffer, Image};
-
-/// A resource bound at the binding with the same index as its position in the list.
-pub enum Bind<'a> {
-    /// A storage image in `GENERAL` layout.
-    StorageImage(&'a Image),
-    StorageBuffer(&'a Buffer),
-    UniformBuffer(&'a Buffer),
-}
-
-impl Bind<'_> {
-    fn descriptor_type(&self) -> vk::DescriptorType {
-        match self {
-            Bind::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
-            Bind::StorageBuffer(_) => vk::DescriptorType::STORAGE_BUFFER,
-            Bind::UniformBuffer(_) => vk::DescriptorType::UNIFORM_BUFFER,
-        }
-    }
-}
+pub use crate::descriptors::Bind;
+use crate::descriptors::BoundSet;
+use crate::resources::Buffer;
 
 /// Specialization constant values: word `i` is the 32-bit value of `constant_id = i`.
 pub type Specialization = Vec<u32>;
@@ -45,9 +26,7 @@ pub enum Dispatch<'a> {
 pub struct ComputePass {
     pipelines: Vec<vk::Pipeline>,
     pub layout: vk::PipelineLayout,
-    set_layout: vk::DescriptorSetLayout,
-    pool: vk::DescriptorPool,
-    set: vk::DescriptorSet,
+    set: Option<BoundSet>,
     /// Local workgroup size in x and y, as declared by the shader.
     workgroup: (u32, u32),
 }
@@ -80,40 +59,22 @@ impl ComputePass {
         specializations: &[Specialization],
     ) -> Result<Self> {
         let device = &ctx.device;
-        let layout_bindings: Vec<_> = bindings
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(i as u32)
-                    .descriptor_type(b.descriptor_type())
-                    .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
-            })
-            .collect();
         // Made step by step; a failed step destroys what was made (null handles are skipped).
         let mut pass = ctx.guard(ComputePass {
             pipelines: Vec::new(),
             layout: vk::PipelineLayout::null(),
-            set_layout: vk::DescriptorSetLayout::null(),
-            pool: vk::DescriptorPool::null(),
-            set: vk::DescriptorSet::null(),
+            set: None,
             workgroup,
         });
+        let set = pass.set.insert(BoundSet::new(ctx, name, bindings, vk::ShaderStageFlags::COMPUTE)?);
+        let set_layouts = [set.layout];
         // SAFETY: all create infos are valid and outlive their calls; every object is
         // destroyed by `destroy`.
         unsafe {
-            pass.set_layout = device
-                .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
-                    None,
-                )
-                .vk("vkCreateDescriptorSetLayout")?;
             let push = [vk::PushConstantRange::default()
                 .stage_flags(vk::ShaderStageFlags::COMPUTE)
                 .offset(0)
                 .size(push_bytes)];
-            let set_layouts = [pass.set_layout];
             let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
             if push_bytes > 0 {
                 layout_info = layout_info.push_constant_ranges(&push);
@@ -128,34 +89,11 @@ impl ComputePass {
             device.destroy_shader_module(module, None);
             pass.pipelines = pipelines?;
 
-            let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
-            for b in bindings {
-                match sizes.iter_mut().find(|s| s.ty == b.descriptor_type()) {
-                    Some(s) => s.descriptor_count += 1,
-                    None => sizes.push(vk::DescriptorPoolSize { ty: b.descriptor_type(), descriptor_count: 1 }),
-                }
-            }
-            if !sizes.is_empty() {
-                pass.pool = device
-                    .create_descriptor_pool(
-                        &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes),
-                        None,
-                    )
-                    .vk("vkCreateDescriptorPool")?;
-                pass.set = device
-                    .allocate_descriptor_sets(
-                        &vk::DescriptorSetAllocateInfo::default().descriptor_pool(pass.pool).set_layouts(&set_layouts),
-                    )
-                    .vk("vkAllocateDescriptorSets")?[0];
-            }
-            write_set(device, pass.set, bindings);
-
             for (i, &pipeline) in pass.pipelines.iter().enumerate() {
                 let label = if pass.pipelines.len() > 1 { format!("{name} #{i}") } else { name.to_string() };
                 ctx.set_name(pipeline, &label);
             }
             ctx.set_name(pass.layout, name);
-            ctx.set_name(pass.set_layout, name);
         }
         Ok(pass.keep())
     }
@@ -163,8 +101,9 @@ impl ComputePass {
     /// Points the descriptor set at other resources of the same kinds and order (after a
     /// resize). No submitted command buffer that uses the pass may still be pending.
     pub fn rebind(&self, ctx: &Context, bindings: &[Bind<'_>]) {
-        // SAFETY: the set belongs to this device and, as the caller guarantees, is not in use.
-        unsafe { write_set(&ctx.device, self.set, bindings) };
+        if let Some(set) = &self.set {
+            set.rebind(ctx, bindings);
+        }
     }
 
     /// Records a dispatch of the first pipeline that covers `width × height` invocations.
@@ -185,8 +124,8 @@ impl ComputePass {
         // SAFETY: `cmd` is recording; the pipeline, layout and set belong to this device.
         unsafe {
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipelines[index]);
-            if self.set != vk::DescriptorSet::null() {
-                device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[self.set], &[]);
+            if let Some(set) = self.set.as_ref().filter(|s| s.set != vk::DescriptorSet::null()) {
+                device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[set.set], &[]);
             }
             if !push.is_empty() {
                 device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
@@ -215,9 +154,8 @@ impl Destroy for ComputePass {
                 device.destroy_pipeline(pipeline, None);
             }
             device.destroy_pipeline_layout(self.layout, None);
-            device.destroy_descriptor_pool(self.pool, None);
-            device.destroy_descriptor_set_layout(self.set_layout, None);
         }
+        self.set.destroy(ctx);
     }
 }
 
@@ -277,42 +215,4 @@ unsafe fn create_pipelines(
             Err(e)
         }
     }
-}
-
-/// Points every binding of `set` at its resource.
-unsafe fn write_set(device: &ash::Device, set: vk::DescriptorSet, bindings: &[Bind<'_>]) {
-    let image_infos: Vec<[vk::DescriptorImageInfo; 1]> = bindings
-        .iter()
-        .map(|b| match b {
-            Bind::StorageImage(image) => {
-                [vk::DescriptorImageInfo::default().image_view(image.view).image_layout(vk::ImageLayout::GENERAL)]
-            }
-            _ => [vk::DescriptorImageInfo::default()],
-        })
-        .collect();
-    let buffer_infos: Vec<[vk::DescriptorBufferInfo; 1]> = bindings
-        .iter()
-        .map(|b| match b {
-            Bind::StorageBuffer(buffer) | Bind::UniformBuffer(buffer) => {
-                [vk::DescriptorBufferInfo::default().buffer(buffer.raw).offset(0).range(vk::WHOLE_SIZE)]
-            }
-            Bind::StorageImage(_) => [vk::DescriptorBufferInfo::default()],
-        })
-        .collect();
-    let writes: Vec<_> = bindings
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            let write = vk::WriteDescriptorSet::default()
-                .dst_set(set)
-                .dst_binding(i as u32)
-                .descriptor_type(b.descriptor_type());
-            match b {
-                Bind::StorageImage(_) => write.image_info(&image_infos[i]),
-                _ => write.buffer_info(&buffer_infos[i]),
-            }
-        })
-        .collect();
-    // SAFETY: the set and every resource belong to this device (caller's contract).
-    unsafe { device.update_descriptor_sets(&writes, &[]) };
 }

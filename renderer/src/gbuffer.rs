@@ -1,12 +1,15 @@
-//! The G-buffer raster pass: per pixel, what the network pass needs, packed into 20 bytes plus
-//! depth (`shaders-glsl/include/gbuffer_layout.glsl`): the world position, the shading normal,
-//! the object and material, and which face is seen. Emission and roughness are per material.
+//! The G-buffer raster pass: per pixel, what the network pass needs, packed into 36 bytes plus
+//! depth (`shaders-glsl/include/gbuffer_layout.glsl`): the world position, the shading normal
+//! (normal-mapped), the object and material, which face is seen, and the material's textured
+//! values there (base colour, roughness, metallic, emissive texture). Textures are sampled as
+//! the path tracer samples them (`gbuffer_materials.glsl`), and alpha-masked texels discarded.
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 
 use crate::context::Context;
+use crate::descriptors::{Bind, BoundSet};
 use crate::error::{Error, Result, VkContext};
 use crate::guard::Destroy;
 use crate::resources::{Buffer, Image};
@@ -18,8 +21,43 @@ use crate::sync::{Access, Pass, ResourceStates, Use};
 pub struct GBufferVertex {
     pub position: [f32; 3],
     pub normal: [f32; 3],
+    pub uv: [f32; 2],
+    /// xyz the tangent, w the bitangent's sign (bitangent = w · normal × tangent).
+    pub tangent: [f32; 4],
     pub object: u32,
     pub material: u32,
+}
+
+/// How a material uses a texture, as `gbuffer.frag` reads it (`TextureRef` in
+/// `gbuffer_materials.glsl`): `uv' = matrix · uv + offset` (row-major 2×2), texels from
+/// `first_texel` in the texel buffer, and `shape`: bits 0-14 the width, 15-29 the height, 30
+/// set for sRGB texels, 31 set when the texture is used at all.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TextureRef {
+    pub matrix: [f32; 4],
+    pub offset: [f32; 2],
+    pub first_texel: u32,
+    pub shape: u32,
+}
+
+impl TextureRef {
+    pub const SRGB: u32 = 1 << 30;
+    pub const PRESENT: u32 = 1 << 31;
+    /// The largest side `shape` holds.
+    pub const MAX_SIDE: u32 = (1 << 15) - 1;
+}
+
+/// A material as `gbuffer.frag` reads it (`SurfaceMaterial` in `gbuffer_materials.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct SurfaceMaterial {
+    /// rgb the base colour factor, a its alpha.
+    pub base_color: [f32; 4],
+    /// Metallic, roughness, the normal map's scale, the alpha cutoff (negative: opaque).
+    pub factors: [f32; 4],
+    /// Base colour, metallic-roughness, normal and emissive textures.
+    pub textures: [TextureRef; 4],
 }
 
 /// The most objects and materials the packed G-buffer tells apart (16 and 15 bits).
@@ -36,11 +74,18 @@ pub struct GBufferTexel {
     pub object: u32,
     pub material: u32,
     pub front: bool,
+    pub base_color: [f32; 3],
+    pub roughness: f32,
+    pub metallic: f32,
+    /// The emissive texture's value (1 without one): it multiplies the material's emission.
+    pub emissive_texture: [f32; 3],
 }
 
 impl GBufferTexel {
-    /// Decodes the `surface` (four words) and `id` (one word) texels.
-    pub fn decode(surface: [u32; 4], id: u32) -> Self {
+    /// Decodes the `surface` (four words), `id` (one word) and `shading` (four words) texels.
+    pub fn decode(surface: [u32; 4], id: u32, shading: [u32; 4]) -> Self {
+        let half = |bits: u32| half_to_f32((bits & 0xffff) as u16);
+        let unorm = |bits: u32| (bits & 0xffff) as f32 / 65535.0;
         let snorm = |bits: u32| (f32::from((bits & 0xffff) as u16 as i16) / 32767.0).max(-1.0);
         let (px, py) = (snorm(surface[3]), snorm(surface[3] >> 16));
         let mut n = [px, py, 1.0 - px.abs() - py.abs()];
@@ -55,7 +100,24 @@ impl GBufferTexel {
             object: id & 0xffff,
             material: (id >> 16) & 0x7fff,
             front: id >> 31 == 1,
+            base_color: [half(shading[0]), half(shading[0] >> 16), half(shading[1])],
+            roughness: unorm(shading[3]),
+            metallic: unorm(shading[3] >> 16),
+            emissive_texture: [half(shading[1] >> 16), half(shading[2]), half(shading[2] >> 16)],
         }
+    }
+}
+
+/// IEEE half to f32 (what GLSL's `unpackHalf2x16` does per half).
+fn half_to_f32(h: u16) -> f32 {
+    let sign = if h >> 15 == 1 { -1.0 } else { 1.0 };
+    let exponent = i32::from((h >> 10) & 0x1f);
+    let mantissa = f32::from(h & 0x3ff);
+    sign * match exponent {
+        0 => mantissa * 2f32.powi(-24),
+        31 if mantissa == 0.0 => f32::INFINITY,
+        31 => f32::NAN,
+        e => (1.0 + mantissa / 1024.0) * 2f32.powi(e - 15),
     }
 }
 
@@ -74,6 +136,7 @@ pub struct GBufferConstants {
 
 pub const SURFACE_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 pub const ID_FORMAT: vk::Format = vk::Format::R32_UINT;
+pub const SHADING_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 /// The G-buffer's images, in `GENERAL` layout between passes.
@@ -82,6 +145,8 @@ pub struct GBufferTargets {
     pub surface: Image,
     /// Object id + 1 (0 where nothing was drawn), material, front face seen.
     pub id: Image,
+    /// The material's textured values: base colour, emissive texture, roughness, metallic.
+    pub shading: Image,
     depth: Image,
     pub extent: vk::Extent2D,
 }
@@ -93,18 +158,19 @@ impl GBufferTargets {
         let image = |name, format, usage| ctx.create_image(name, extent, format, usage).map(|i| ctx.guard(i));
         let surface = image("gbuffer surface", SURFACE_FORMAT, color)?;
         let id = image("gbuffer id", ID_FORMAT, color)?;
+        let shading = image("gbuffer shading", SHADING_FORMAT, color)?;
         let depth = image("gbuffer depth", DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?;
         ctx.submit_once(|cmd| {
-            for image in [&surface, &id] {
+            for image in [&surface, &id, &shading] {
                 ctx.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
             }
             ctx.transition(cmd, &depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
         })?;
-        Ok(GBufferTargets { surface: surface.keep(), id: id.keep(), depth: depth.keep(), extent })
+        Ok(GBufferTargets { surface: surface.keep(), id: id.keep(), shading: shading.keep(), depth: depth.keep(), extent })
     }
 
-    fn colors(&self) -> [&Image; 2] {
-        [&self.surface, &self.id]
+    fn colors(&self) -> [&Image; 3] {
+        [&self.surface, &self.id, &self.shading]
     }
 
     /// Records where `new` left the images.
@@ -122,17 +188,21 @@ impl GBufferTargets {
 
 impl Destroy for GBufferTargets {
     fn destroy(self, ctx: &Context) {
-        for image in [self.surface, self.id, self.depth] {
+        for image in [self.surface, self.id, self.shading, self.depth] {
             ctx.destroy_image(image);
         }
     }
 }
 
-/// The scene's triangles on the GPU.
+/// The scene's triangles, materials and textures on the GPU.
 pub struct GBufferMesh {
     /// The vertices, then the triangles' indices from `index_offset`.
     buffer: Buffer,
     index_offset: u64,
+    /// One [`SurfaceMaterial`] per material.
+    materials: Buffer,
+    /// Every texture's RGBA8 texels, one word each.
+    texels: Buffer,
     /// One draw per run of an object's triangles, culled against the view each frame.
     draws: Vec<Draw>,
 }
@@ -200,11 +270,36 @@ impl Draw {
 
 impl GBufferMesh {
     /// The mesh of `vertices` and the triangles that `indices` (three per triangle) make of
-    /// them. Shared vertices are shaded once where the driver caches them.
-    pub fn new(ctx: &Context, vertices: &[GBufferVertex], indices: &[u32]) -> Result<Self> {
+    /// them, with `materials` whose textures index into `texels`. Shared vertices are shaded
+    /// once where the driver caches them.
+    pub fn new(
+        ctx: &Context,
+        vertices: &[GBufferVertex],
+        indices: &[u32],
+        materials: &[SurfaceMaterial],
+        texels: &[u32],
+    ) -> Result<Self> {
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= vertices.len()) {
             return Err(Error::Invalid(format!("mesh index {bad} is past its {} vertices", vertices.len())));
         }
+        if let Some(bad) = vertices.iter().find(|v| v.material as usize >= materials.len().max(1)) {
+            return Err(Error::Invalid(format!("vertex material {} is past the {} materials", bad.material, materials.len())));
+        }
+        let max = u64::from(ctx.info.limits.max_storage_buffer_range);
+        if texels.len() as u64 * 4 > max {
+            return Err(Error::Invalid(format!(
+                "the textures' {} MiB exceed the device's largest storage buffer ({} MiB)",
+                texels.len() * 4 >> 20,
+                max >> 20
+            )));
+        }
+        // Storage buffers may not be empty.
+        let none = [SurfaceMaterial::default()];
+        let material_bytes: &[u8] = bytemuck::cast_slice(if materials.is_empty() { &none } else { materials });
+        let texel_bytes: &[u8] = if texels.is_empty() { &[0; 4] } else { bytemuck::cast_slice(texels) };
+        let materials =
+            ctx.guard(ctx.create_buffer_with_data("materials", material_bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?);
+        let texels = ctx.guard(ctx.create_buffer_with_data("texels", texel_bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?);
         let mut bytes: Vec<u8> = bytemuck::cast_slice(vertices).to_vec();
         let index_offset = bytes.len() as u64;
         bytes.extend_from_slice(bytemuck::cast_slice(indices));
@@ -223,11 +318,19 @@ impl GBufferMesh {
             // SAFETY: both buffers hold at least `bytes.len()` bytes.
             unsafe { ctx.device.cmd_copy_buffer(cmd, staging.raw, buffer.raw, &[region]) };
         })?;
-        Ok(GBufferMesh { buffer: buffer.keep(), index_offset, draws: Draw::runs(vertices, indices) })
+        Ok(GBufferMesh {
+            buffer: buffer.keep(),
+            index_offset,
+            materials: materials.keep(),
+            texels: texels.keep(),
+            draws: Draw::runs(vertices, indices),
+        })
     }
 
     pub fn destroy(self, ctx: &Context) {
-        ctx.destroy_buffer(self.buffer);
+        for buffer in [self.buffer, self.materials, self.texels] {
+            ctx.destroy_buffer(buffer);
+        }
     }
 }
 
@@ -240,21 +343,31 @@ impl Destroy for GBufferMesh {
 pub struct GBufferPass {
     pipeline: vk::Pipeline,
     layout: vk::PipelineLayout,
+    /// The materials and texels of the mesh the pass was made for.
+    set: Option<BoundSet>,
 }
 
 impl GBufferPass {
-    /// `vertex` and `fragment` are the SPIR-V of `gbuffer.vert` and `gbuffer.frag`.
-    pub fn new(ctx: &Context, vertex: &[u32], fragment: &[u32]) -> Result<Self> {
+    /// `vertex` and `fragment` are the SPIR-V of `gbuffer.vert` and `gbuffer.frag`; the pass
+    /// reads the materials and textures of `mesh`, and draws only that mesh.
+    pub fn new(ctx: &Context, vertex: &[u32], fragment: &[u32], mesh: &GBufferMesh) -> Result<Self> {
         let device = &ctx.device;
         let push = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::VERTEX)
             .size(std::mem::size_of::<GBufferConstants>() as u32)];
         // Destroyed by the guard if a step fails; null handles are skipped.
-        let mut pass = ctx.guard(GBufferPass { pipeline: vk::Pipeline::null(), layout: vk::PipelineLayout::null() });
+        let mut pass =
+            ctx.guard(GBufferPass { pipeline: vk::Pipeline::null(), layout: vk::PipelineLayout::null(), set: None });
+        let bindings = [Bind::StorageBuffer(&mesh.materials), Bind::StorageBuffer(&mesh.texels)];
+        let set = pass.set.insert(BoundSet::new(ctx, "gbuffer", &bindings, vk::ShaderStageFlags::FRAGMENT)?);
+        let set_layouts = [set.layout];
         // SAFETY: valid create infos that outlive the calls; objects destroyed in `destroy`.
         unsafe {
             pass.layout = device
-                .create_pipeline_layout(&vk::PipelineLayoutCreateInfo::default().push_constant_ranges(&push), None)
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push),
+                    None,
+                )
                 .vk("vkCreatePipelineLayout")?;
             let layout = pass.layout;
             ctx.step("vkCreateGraphicsPipelines")?;
@@ -290,8 +403,16 @@ impl GBufferPass {
                     .location(1)
                     .format(vk::Format::R32G32B32_SFLOAT)
                     .offset(12),
-                vk::VertexInputAttributeDescription::default().location(2).format(vk::Format::R32_UINT).offset(24),
-                vk::VertexInputAttributeDescription::default().location(3).format(vk::Format::R32_UINT).offset(28),
+                vk::VertexInputAttributeDescription::default().location(2).format(vk::Format::R32_UINT).offset(48),
+                vk::VertexInputAttributeDescription::default().location(3).format(vk::Format::R32_UINT).offset(52),
+                vk::VertexInputAttributeDescription::default()
+                    .location(4)
+                    .format(vk::Format::R32G32_SFLOAT)
+                    .offset(24),
+                vk::VertexInputAttributeDescription::default()
+                    .location(5)
+                    .format(vk::Format::R32G32B32A32_SFLOAT)
+                    .offset(32),
             ];
             let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
                 .vertex_binding_descriptions(&bindings)
@@ -313,11 +434,11 @@ impl GBufferPass {
                 .depth_write_enable(true)
                 .depth_compare_op(vk::CompareOp::LESS);
             let blend =
-                [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 2];
+                [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 3];
             let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
             let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
             let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-            let formats = [SURFACE_FORMAT, ID_FORMAT];
+            let formats = [SURFACE_FORMAT, ID_FORMAT, SHADING_FORMAT];
             let mut rendering = vk::PipelineRenderingCreateInfo::default()
                 .color_attachment_formats(&formats)
                 .depth_attachment_format(DEPTH_FORMAT);
@@ -355,6 +476,8 @@ impl GBufferPass {
             targets.colors().iter().map(|i| Use::image(i, Access::COLOR_ATTACHMENT_WRITE)).collect();
         uses.push(Use::image(&targets.depth, Access::DEPTH_ATTACHMENT));
         uses.push(Use::buffer(&mesh.buffer, Access::VERTEX_INDEX_READ));
+        uses.push(Use::buffer(&mesh.materials, Access::FRAGMENT_READ));
+        uses.push(Use::buffer(&mesh.texels, Access::FRAGMENT_READ));
         Pass::new("gbuffer", uses, move |cmd| self.record(ctx, cmd, targets, mesh, &constants))
     }
 
@@ -409,6 +532,9 @@ impl GBufferPass {
             device.cmd_set_viewport(cmd, 0, &[viewport]);
             device.cmd_set_scissor(cmd, 0, &[area]);
             device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::VERTEX, 0, bytemuck::bytes_of(camera));
+            if let Some(set) = &self.set {
+                device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[set.set], &[]);
+            }
             device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.buffer.raw], &[0]);
             device.cmd_bind_index_buffer(cmd, mesh.buffer.raw, mesh.index_offset, vk::IndexType::UINT32);
             // Objects whose bounds are outside the view cost no vertex work or triangle set-up.
@@ -431,6 +557,7 @@ impl Destroy for GBufferPass {
             ctx.device.destroy_pipeline(self.pipeline, None);
             ctx.device.destroy_pipeline_layout(self.layout, None);
         }
+        self.set.destroy(ctx);
     }
 }
 
@@ -439,7 +566,7 @@ mod tests {
     use super::*;
 
     fn vertex(position: [f32; 3], object: u32) -> GBufferVertex {
-        GBufferVertex { position, normal: [0.0, 0.0, 1.0], object, material: 0 }
+        GBufferVertex { position, normal: [0.0, 0.0, 1.0], object, ..Default::default() }
     }
 
     /// Identity view-projection: the clip volume is x, y in [-1, 1], z in [0, 1].

@@ -5,6 +5,7 @@
 
 pub mod compute;
 pub mod context;
+pub mod descriptors;
 pub mod device_info;
 pub mod error;
 pub mod frames;

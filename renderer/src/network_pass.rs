@@ -278,8 +278,8 @@ impl NetworkPass {
     /// The pass for `objects` (by object id; `None` for objects without networks), which
     /// reads `gbuffer`. With `display` (an RGBA8 storage image of the G-buffer's size), the
     /// pass writes only that: the component shown, tonemapped, as a window shows it; the
-    /// storage variant cannot. `materials` holds each material's emitted radiance (rgb) and
-    /// roughness.
+    /// storage variant cannot. `materials` holds each material's emitted radiance (rgb, before
+    /// its emissive texture) and an unused fourth value.
     pub fn new(
         ctx: &Context,
         variant: Variant,
@@ -390,7 +390,7 @@ impl NetworkPass {
     ) -> Result<Vec<Pass<'a>>> {
         let extent = self.extent;
         let read = |image| Use::image(image, Access::COMPUTE_READ);
-        let g = [&gbuffer.surface, &gbuffer.id];
+        let g = [&gbuffer.surface, &gbuffer.id, &gbuffer.shading];
         let materials = Use::buffer(&self.materials, Access::COMPUTE_READ);
         let writes: Vec<Use> = Written::of(&self.outputs, display)?
             .images()
@@ -427,6 +427,7 @@ impl NetworkPass {
                 );
                 let mut uses = vec![
                     read(&gbuffer.id),
+                    read(&gbuffer.shading),
                     materials,
                     Use::buffer(&s.trained, Access::COMPUTE_READ),
                     Use::buffer(&s.dispatch, Access::COMPUTE_READ_WRITE),
@@ -502,6 +503,7 @@ fn network_bindings<'a>(
         Bind::StorageImage(&gbuffer.surface),
         Bind::StorageImage(&gbuffer.id),
         Bind::StorageBuffer(materials),
+        Bind::StorageImage(&gbuffer.shading),
         Bind::StorageBuffer(buffer),
     ];
     binds.extend(written.images().into_iter().map(Bind::StorageImage));
@@ -520,6 +522,7 @@ fn classify_bindings<'a>(
     let mut binds = vec![
         Bind::StorageImage(&gbuffer.id),
         Bind::StorageBuffer(materials),
+        Bind::StorageImage(&gbuffer.shading),
         Bind::StorageBuffer(trained),
         Bind::StorageBuffer(dispatch),
         Bind::StorageBuffer(tiles),

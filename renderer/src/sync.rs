@@ -50,6 +50,12 @@ impl Access {
         ),
         vk::ImageLayout::GENERAL,
     );
+    /// Storage buffers read by a fragment shader.
+    pub const FRAGMENT_READ: Access = Access::new(
+        vk::PipelineStageFlags2::FRAGMENT_SHADER,
+        vk::AccessFlags2::SHADER_STORAGE_READ,
+        vk::ImageLayout::GENERAL,
+    );
     /// A color attachment that is cleared and written, kept in `GENERAL` so that compute
     /// passes read it without a layout change.
     pub const COLOR_ATTACHMENT_WRITE: Access = Access::new(

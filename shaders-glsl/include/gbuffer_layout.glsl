@@ -1,12 +1,16 @@
-// The packed G-buffer, 20 bytes per pixel plus depth, written by gbuffer.frag and read by the
+// The packed G-buffer, 36 bytes per pixel plus depth, written by gbuffer.frag and read by the
 // network passes; mirrored by renderer/src/gbuffer.rs (`GBufferTexel`).
 //
 //   surface (rgba32ui): xyz the world position's float bits, w the shading normal
 //                       (octahedral, two 16-bit snorms)
 //   id (r32ui):         bits 0-15 object id + 1 (0: nothing drawn), bits 16-30 material,
 //                       bit 31 set when the front face is seen (emitters emit from it only)
+//   shading (rgba32ui): the material's textured values at the pixel, as half floats: x base
+//                       colour r, g; y base colour b, emissive texture r; z emissive texture
+//                       g, b; and w roughness, metallic as 16-bit unorms
 //
-// Emission and roughness are per material, in the materials buffer the passes bind.
+// The emissive texture multiplies the material's emission, in the materials buffer the
+// network passes bind.
 #ifndef RRF_GBUFFER_LAYOUT_GLSL
 #define RRF_GBUFFER_LAYOUT_GLSL
 
@@ -46,6 +50,26 @@ uint id_material(uint id) {
 
 bool id_front(uint id) {
     return (id & 0x80000000u) != 0u;
+}
+
+struct Shading {
+    vec3 base_color;
+    vec3 emissive_texture;
+    float roughness;
+    float metallic;
+};
+
+uvec4 encode_shading(Shading s) {
+    return uvec4(packHalf2x16(s.base_color.rg), packHalf2x16(vec2(s.base_color.b, s.emissive_texture.r)),
+                 packHalf2x16(s.emissive_texture.gb), packUnorm2x16(vec2(s.roughness, s.metallic)));
+}
+
+Shading decode_shading(uvec4 packed) {
+    vec2 x = unpackHalf2x16(packed.x);
+    vec2 y = unpackHalf2x16(packed.y);
+    vec2 z = unpackHalf2x16(packed.z);
+    vec2 w = unpackUnorm2x16(packed.w);
+    return Shading(vec3(x, y.x), vec3(y.y, z), w.x, w.y);
 }
 
 #endif

@@ -16,21 +16,22 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "gbuffer_layout.glsl"
 
 layout(binding = 0, r32ui) uniform readonly uimage2D gbuffer_id;
-// Per material: rgb emitted radiance, w roughness.
+// Per material: rgb emitted radiance (before the emissive texture), w unused.
 layout(std430, binding = 1) readonly buffer Materials { vec4 materials[]; };
+layout(binding = 2, rgba32ui) uniform readonly uimage2D gbuffer_shading;
 // 1 where object (id - 1) has networks.
-layout(binding = 2) readonly buffer Trained { uint trained[]; };
+layout(binding = 3) readonly buffer Trained { uint trained[]; };
 // VkDispatchIndirectCommand per object: x counts its tiles; y and z are 1.
-layout(binding = 3) buffer Dispatch { uint dispatch[]; };
+layout(binding = 4) buffer Dispatch { uint dispatch[]; };
 // Object (id - 1)'s tiles from index (id - 1) * tile_capacity, each as x | y << 16.
-layout(binding = 4) writeonly buffer Tiles { uint tiles[]; };
+layout(binding = 5) writeonly buffer Tiles { uint tiles[]; };
 #ifdef DISPLAY
-layout(binding = 5, rgba8) uniform writeonly image2D display;
+layout(binding = 6, rgba8) uniform writeonly image2D display;
 #include "tonemap.glsl"
 #else
-layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
+layout(binding = 6, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = 7, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = 8, rgba32f) uniform writeonly image2D out_gi;
 #endif
 
 layout(push_constant) uniform Constants {
@@ -57,7 +58,11 @@ void main() {
         if (id > 0u && trained[id - 1u] != 0u) {
             atomicOr(seen[(id - 1u) / 32u], 1u << ((id - 1u) % 32u));
         } else {
-            vec3 emission = id > 0u && id_front(packed) ? materials[id_material(packed)].rgb : vec3(0.0);
+            vec3 emission = vec3(0.0);
+            if (id > 0u && id_front(packed)) {
+                Shading shading = decode_shading(imageLoad(gbuffer_shading, pixel));
+                emission = materials[id_material(packed)].rgb * shading.emissive_texture;
+            }
 #ifdef DISPLAY
             vec3 emitted = constants.shown == 0u ? emission : vec3(0.0);
             imageStore(display, pixel, vec4(tonemap(emitted, constants.exposure_scale), 1.0));

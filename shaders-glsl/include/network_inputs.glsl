@@ -1,6 +1,6 @@
 // What every network variant shares: the network's shape, its activation, the 13 raw inputs
 // of a pixel (in the order of `raw_inputs` in baker/src/network.rs), and the G-buffer and
-// materials bindings they are read from (bindings 0-2 of every network shader).
+// materials bindings they are read from (bindings 0-3 of every network shader).
 #ifndef RRF_NETWORK_INPUTS_GLSL
 #define RRF_NETWORK_INPUTS_GLSL
 
@@ -11,12 +11,16 @@
 
 layout(binding = 0, rgba32ui) uniform readonly uimage2D gbuffer_surface;
 layout(binding = 1, r32ui) uniform readonly uimage2D gbuffer_id;
-// Per material: rgb emitted radiance, w roughness.
+// Per material: rgb emitted radiance (before the emissive texture), w unused.
 layout(std430, binding = 2) readonly buffer Materials { vec4 materials[]; };
+layout(binding = 3, rgba32ui) uniform readonly uimage2D gbuffer_shading;
 
 // What the pixel's surface emits towards the viewer.
-vec3 surface_emission(uint id) {
-    return id_front(id) ? materials[id_material(id)].rgb : vec3(0.0);
+vec3 surface_emission(ivec2 pixel, uint id) {
+    if (!id_front(id)) {
+        return vec3(0.0);
+    }
+    return materials[id_material(id)].rgb * decode_shading(imageLoad(gbuffer_shading, pixel)).emissive_texture;
 }
 
 // tanh as x·P(x²)/Q(x²) on [-9, 9], a rational least-squares fit made for rrf (maximum
@@ -38,7 +42,7 @@ float[INPUTS] raw_inputs(ivec2 pixel, uint id, vec3 eye, vec3 light) {
     vec3 p = uintBitsToFloat(surface.xyz);
     vec3 n = decode_normal(surface.w);
     vec3 v = normalize(eye - p);
-    float roughness = materials[id_material(id)].w;
+    float roughness = decode_shading(imageLoad(gbuffer_shading, pixel)).roughness;
     return float[INPUTS](p.x, p.y, p.z, v.x, v.y, v.z, light.x, light.y, light.z, n.x, n.y, n.z, roughness);
 }
 

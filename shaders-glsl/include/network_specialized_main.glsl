@@ -17,14 +17,14 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const uint OBJECT = 1u;
 layout(constant_id = 1) const bool TILED = true;
 
-// Bindings 0-2 (G-buffer, materials): network_inputs.glsl.
-layout(binding = 3) readonly buffer Tiles { uint tiles[]; };
+// Bindings 0-3 (G-buffer, materials): network_inputs.glsl.
+layout(binding = 4) readonly buffer Tiles { uint tiles[]; };
 #ifdef DISPLAY
-layout(binding = 4, rgba8) uniform writeonly image2D display;
+layout(binding = 5, rgba8) uniform writeonly image2D display;
 #else
-layout(binding = 4, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 5, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 6, rgba32f) uniform writeonly image2D out_gi;
+layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
 #endif
 
 layout(push_constant) uniform Constants {
@@ -62,12 +62,12 @@ void main() {
 #ifdef DISPLAY
     vec3 shown = constants.shown == 1u ? direct
                : constants.shown == 2u ? indirect
-               : surface_emission(id) + direct + indirect;
+               : surface_emission(pixel, id) + direct + indirect;
     imageStore(display, pixel, vec4(tonemap(shown, constants.exposure_scale), 1.0));
 #else
     imageStore(out_direct, pixel, vec4(direct, 1.0));
     imageStore(out_indirect, pixel, vec4(indirect, 1.0));
-    imageStore(out_gi, pixel, vec4(surface_emission(id) + direct + indirect, 1.0));
+    imageStore(out_gi, pixel, vec4(surface_emission(pixel, id) + direct + indirect, 1.0));
 #endif
 }
 
