@@ -167,6 +167,7 @@ fn network_layout_glsl() -> String {
     for (name, value) in constants {
         let _ = writeln!(s, "#define {name} {value}");
     }
+    let _ = writeln!(s, "#define MIN_REFLECTANCE {MIN_REFLECTANCE:?}");
     s
 }
 

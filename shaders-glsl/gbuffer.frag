@@ -31,8 +31,12 @@ void main() {
         vec3 t = sample_texture(m.textures[2], in_uv).xyz * 2.0 - 1.0;
         n = normal_mapped(n, in_tangent, vec3(t.xy * m.factors.z, t.z));
     }
-    Shading shading = Shading(base.rgb, sample_texture(m.textures[3], in_uv).rgb,
-                              m.factors.y * metallic_roughness.g, m.factors.x * metallic_roughness.b);
+    // A face that does not emit gets no emission at all (emitters emit from the front only,
+    // unless double-sided).
+    bool emits = gl_FrontFacing || m.emits_back != 0u;
+    vec3 emissive = emits ? sample_texture(m.textures[3], in_uv).rgb : vec3(0.0);
+    Shading shading = Shading(base.rgb, emissive, m.factors.y * metallic_roughness.g,
+                              m.factors.x * metallic_roughness.b);
     out_surface = uvec4(floatBitsToUint(in_position), encode_normal(gl_FrontFacing ? n : -n));
     // Object ids are stored +1 so that 0 means "nothing here".
     out_id = encode_id(in_object + 1u, in_material, gl_FrontFacing);

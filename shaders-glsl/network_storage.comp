@@ -40,8 +40,9 @@ void main() {
             for (int i = 0; i < INPUTS; ++i) {
                 x[i] = normalize_input(raw[i], weights[ranges + i], weights[ranges + INPUTS + i]);
             }
-            direct = forward(base, x) * weights[ranges + 2 * INPUTS];
-            indirect = forward(base + PARAMETERS, x) * weights[ranges + 2 * INPUTS + 1];
+            vec3 reflectance = surface_reflectance(pixel, id);
+            direct = forward(base, x) * weights[ranges + 2 * INPUTS] * reflectance;
+            indirect = forward(base + PARAMETERS, x) * weights[ranges + 2 * INPUTS + 1] * reflectance;
         }
     }
     imageStore(out_direct, pixel, vec4(direct, 1.0));

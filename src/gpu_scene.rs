@@ -46,10 +46,10 @@ pub fn gbuffer_mesh(scene: &Scene) -> (Vec<GBufferVertex>, Vec<u32>) {
     (vertices, indices)
 }
 
-/// Each material's emitted radiance (rgb, before its emissive texture), as the network pass
-/// reads them.
+/// Each material's emitted radiance (rgb, before its emissive texture) and specular factor,
+/// as the network pass reads them.
 pub fn network_materials(scene: &Scene) -> Vec<[f32; 4]> {
-    scene.materials.iter().map(|m| m.emission.extend(0.0).to_array()).collect()
+    scene.materials.iter().map(|m| m.emission.extend(m.specular).to_array()).collect()
 }
 
 /// The materials as the G-buffer pass reads them, and every texture's texels after one another
@@ -98,6 +98,8 @@ pub fn surface_materials(scene: &Scene) -> (Vec<SurfaceMaterial>, Vec<u32>) {
                 texture(m.normal_texture.map(|n| n.0)),
                 texture(m.emissive_texture),
             ],
+            emits_back: u32::from(m.double_sided),
+            pad: [0; 3],
         })
         .collect();
     (materials, texels)

@@ -82,9 +82,9 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
             let scale = (si.position - camera.eye).length();
             worst_position = worst_position.max((p - si.position).length() / scale);
             worst_normal = worst_normal.max((n - si.shading_normal).length());
-            // The material's textured values (emission from its front).
+            // The material's textured values (emission from the faces that emit).
             let material = &scene.materials[texel.material as usize];
-            let e = if texel.front { material.emission * Vec3::from(texel.emissive_texture) } else { Vec3::ZERO };
+            let e = material.emission * Vec3::from(texel.emissive_texture);
             let errors = [
                 (Vec3::from(texel.base_color) - si.bsdf.base_color).abs().max_element(),
                 (texel.roughness - si.roughness).abs(),
@@ -111,8 +111,9 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
     assert!(worst_position < 1e-4, "position error {worst_position}");
     assert!(worst_normal < 1e-3, "normal error {worst_normal}");
     assert!(material_off * 200 <= checked, "{material_off} of {checked} pixels' material values are off");
-    // Untextured values agree up to the G-buffer's half floats and 16-bit unorms.
-    assert!(worst_material[1] < 1e-4 && worst_material[2] < 1e-4, "roughness or metallic off: {worst_material:?}");
+    // Values agree up to the G-buffer's half floats and 16-bit unorms, and textured ones up to
+    // the filtering of slightly different UVs.
+    assert!(worst_material.iter().all(|&e| e < 1e-3), "material values off: {worst_material:?}");
 }
 
 #[test]
@@ -123,4 +124,13 @@ fn gbuffer_matches_primary_hits_cornell_box() {
 #[test]
 fn gbuffer_matches_primary_hits_many_objects() {
     compare("many-objects", "table", 120, 80);
+}
+
+/// Textures with a transform, a normal map and roughness texture, alpha-masked leaves and a
+/// textured emitter seen from both sides.
+#[test]
+fn gbuffer_matches_primary_hits_gallery() {
+    compare("gallery", "default", 120, 90);
+    compare("gallery", "plant", 120, 90);
+    compare("gallery", "screen-back", 120, 90);
 }

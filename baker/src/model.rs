@@ -21,9 +21,11 @@ use crate::hash::Fnv64;
 use crate::network::{Component, Network, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
 use crate::scene::Scene;
 
-/// Version 2: the scene hash covers only what shapes the samples (not the views), and no
-/// timings are recorded. Version 1 models are refused with a message to re-bake.
-pub const FORMAT_VERSION: u32 = 2;
+/// Version 3: the networks give radiance over the surface's reflectance
+/// ([`crate::network::reflectance`]), which the renderer multiplies back. Version 2: the scene
+/// hash covers only what shapes the samples (not the views), and no timings are recorded.
+/// Older models are refused with a message to re-bake.
+pub const FORMAT_VERSION: u32 = 3;
 
 /// The names of the 13 inputs, in order.
 pub const INPUT_NAMES: [&str; INPUTS] = [

@@ -28,6 +28,18 @@ impl Component {
     }
 }
 
+/// What the networks' outputs are multiplied by: the surface's reflectance, per channel, its
+/// diffuse albedo `baseColor · (1 − metallic)` plus its specular reflectance at normal incidence
+/// `mix(0.04 · specular, baseColor, metallic)` (at least [`MIN_REFLECTANCE`]). The networks learn
+/// radiance divided by it, so that a texture's detail comes from the texture at run time and
+/// the networks learn only the smooth light (as the RRF paper does for textured surfaces, and
+/// neural radiance caches by "demodulating" albedo). The GLSL twin is in `network_inputs.glsl`.
+pub fn reflectance(base_color: Vec3, metallic: f32, specular: f32) -> Vec3 {
+    let diffuse = base_color * (1.0 - metallic);
+    let f0 = Vec3::splat(0.04 * specular).lerp(base_color, metallic);
+    (diffuse + f0).max(Vec3::splat(MIN_REFLECTANCE))
+}
+
 /// The network's raw inputs, before normalisation: surface position (3), direction towards
 /// the viewer (3), light position (3), shading normal (3), roughness (1).
 pub fn raw_inputs(position: Vec3, to_viewer: Vec3, light: Vec3, normal: Vec3, roughness: f32) -> [f32; INPUTS] {

@@ -24,6 +24,10 @@ pub const B3: usize = W3 + OUTPUTS * HIDDEN2;
 /// Parameters of one network.
 pub const PARAMETERS: usize = B3 + OUTPUTS;
 
+/// The least reflectance (`network::reflectance`) the networks' targets are divided by, so
+/// that black surfaces do not divide by zero.
+pub const MIN_REFLECTANCE: f32 = 0.01;
+
 /// Floats per object slot of the renderer's storage variant: direct and indirect parameters,
 /// the input ranges (min, then max), two output scales, and a presence flag.
 pub const OBJECT_STRIDE: usize = 2 * PARAMETERS + 2 * INPUTS + 3;

@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::model::Model;
-use crate::network::{raw_inputs, Component, Network};
+use crate::network::{raw_inputs, reflectance, Component, Network};
 use crate::trace::{Camera, Radiance, RadianceImage, World};
 
 /// The networks of every object, by object id; `None` for objects without one.
@@ -42,7 +42,8 @@ pub fn predict_image(world: &World, camera: &Camera, model: &Model, width: u32, 
             let si = world.interaction(camera.eye, dir, hit);
             let inputs = raw_inputs(si.position, -dir, light, si.shading_normal, si.roughness);
             let object = si.object as usize;
-            let eval = |n: Option<&Network>| n.map_or(Vec3::ZERO, |n| n.evaluate(&inputs));
+            let r = reflectance(si.bsdf.base_color, si.bsdf.metallic, si.bsdf.specular);
+            let eval = |n: Option<&Network>| n.map_or(Vec3::ZERO, |n| n.evaluate(&inputs) * r);
             Radiance {
                 emitted: si.emission,
                 direct: eval(networks.direct[object]),

@@ -6,7 +6,8 @@ use std::path::{Path, PathBuf};
 
 use rrf_baker::glam::{Vec2, Vec3, Vec4};
 use rrf_baker::scene::{
-    AlphaMode, BakePresets, ColorSpace, Cone, Material, Object, Part, PointLight, Scene, Texture, TextureRef, UvTransform, View,
+    AlphaMode, BakePresets, ColorSpace, Cone, Material, Object, Part, PointLight, Scene, Texture, TextureRef,
+    UvTransform, View,
 };
 use rrf_baker::trace::integrator::trace_ray;
 use rrf_baker::trace::sampling::Rng;
@@ -375,11 +376,7 @@ fn normal_map_tilts_the_shading_normal() {
         let r = estimate(&world, p + Vec3::new(0.1, 0.5, 0.3), p, &settings, 4, 0);
         let d = Vec3::Y - p;
         let expected = rho / PI * intensity * n.dot(d.normalize()).max(0.0) / d.length_squared();
-        assert!(
-            (r.direct - expected).abs().max_element() <= 1e-4 * intensity.x,
-            "x = {x}: {} vs {expected}",
-            r.direct
-        );
+        assert!((r.direct - expected).abs().max_element() <= 1e-4 * intensity.x, "x = {x}: {} vs {expected}", r.direct);
     }
 }
 

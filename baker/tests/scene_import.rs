@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use rrf_baker::glam::Vec3;
-use rrf_baker::scene::{LightKind, Scene, SceneError};
+use rrf_baker::scene::{AlphaMode, LightKind, Scene, SceneError, UvTransform};
 use serde_json::{json, Value};
 
 fn repo() -> PathBuf {
@@ -61,7 +61,7 @@ fn load_err(path: &Path) -> String {
 #[test]
 fn shipped_scenes_load() {
     for (name, min_objects, min_triangles) in
-        [("cornell-box", 8, 30), ("glossy-room", 10, 1000), ("many-objects", 24, 50_000)]
+        [("cornell-box", 8, 30), ("glossy-room", 10, 1000), ("many-objects", 24, 50_000), ("gallery", 11, 250_000)]
     {
         let scene = Scene::load(&repo().join("scenes").join(name)).unwrap_or_else(|e| panic!("{e}"));
         assert!(scene.objects.len() >= min_objects, "{name}: {} objects", scene.objects.len());
@@ -769,4 +769,103 @@ fn spot_lights_keep_their_cone_and_directional_lights_say_why_they_are_skipped()
     assert_eq!(spot.intensity, Vec3::ONE);
     assert_eq!(scene.point_lights.len(), 1);
     assert!(scene.warnings.iter().any(|w| w.contains("\"Sun\"") && w.contains("no position")), "{:?}", scene.warnings);
+}
+
+/// The gallery carries every material feature as the generator wrote it.
+#[test]
+fn gallery_materials_as_written() {
+    let scene = Scene::load(&repo().join("scenes/gallery")).unwrap();
+    let material = |name: &str| scene.materials.iter().find(|m| m.name == name).unwrap();
+    let tiles = material("tiles").base_color_texture.expect("tiles are textured");
+    assert_eq!(tiles.transform, UvTransform::new([0.1, 0.2], 0.3, [3.0, 3.0]));
+    let brick = material("brick");
+    assert!(brick.metallic_roughness_texture.is_some());
+    assert_eq!(brick.normal_texture.map(|n| n.1), Some(1.0));
+    let leaf = material("leaf");
+    assert_eq!(leaf.alpha_mode, AlphaMode::Mask { cutoff: 0.5 });
+    assert!(leaf.double_sided);
+    let screen = material("screen");
+    assert!(screen.emissive_texture.is_some() && screen.double_sided);
+    assert!(screen.is_emissive() && !screen.is_plain_emitter(), "a textured emitter also learns");
+    let light = scene.moving_light.as_ref().unwrap();
+    let LightKind::Point(i) = light.kind else { panic!("the spot is the moving light") };
+    assert!(scene.point_lights[i].cone.is_some());
+    // Tangents, derived from the UVs: one per vertex, unit, orthogonal to the normal.
+    for object in &scene.objects {
+        assert_eq!(object.tangents.len(), object.positions.len(), "{}", object.name);
+        for (t, n) in object.tangents.iter().zip(&object.normals) {
+            assert!((t.truncate().length() - 1.0).abs() < 1e-4 && t.truncate().dot(*n).abs() < 1e-3);
+            assert!(t.w == 1.0 || t.w == -1.0);
+        }
+    }
+}
+
+/// One textured triangle whose material is `material` (a glTF material object), with UVs.
+fn textured_triangle(test: &str, material: Value, extra_attributes: Option<(&str, Vec<f32>, &str)>) -> PathBuf {
+    let dir = scratch(test);
+    let (mut gltf, mut bin) = tiny_gltf(&TRIANGLE, &[0, 1, 2]);
+    let mut attribute = |name: &str, values: Vec<f32>, kind: &str, gltf: &mut Value| {
+        let offset = bin.len();
+        bin.extend(values.iter().flat_map(|v| v.to_le_bytes()));
+        gltf["bufferViews"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "buffer": 0, "byteOffset": offset, "byteLength": bin.len() - offset }));
+        let view = gltf["bufferViews"].as_array().unwrap().len() - 1;
+        gltf["accessors"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!({ "bufferView": view, "componentType": 5126, "count": 3, "type": kind }));
+        gltf["meshes"][0]["primitives"][0]["attributes"][name] = json!(gltf["accessors"].as_array().unwrap().len() - 1);
+    };
+    attribute("TEXCOORD_0", vec![0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC2", &mut gltf);
+    attribute("NORMAL", vec![0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0], "VEC3", &mut gltf);
+    if let Some((name, values, kind)) = extra_attributes {
+        attribute(name, values, kind, &mut gltf);
+    }
+    gltf["buffers"][0]["byteLength"] = json!(bin.len());
+    // A 1×1 PNG as a data URI.
+    let mut png = Vec::new();
+    image::RgbaImage::from_pixel(1, 1, image::Rgba([128, 128, 255, 255]))
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .unwrap();
+    gltf["images"] = json!([{ "uri": format!("data:image/png;base64,{}", base64(&png)) }]);
+    gltf["textures"] = json!([{ "source": 0 }]);
+    gltf["materials"] = json!([material]);
+    gltf["meshes"][0]["primitives"][0]["material"] = json!(0);
+    write_scene(&dir, &gltf, &bin)
+}
+
+#[test]
+fn blend_is_drawn_opaque_with_a_warning() {
+    let path = textured_triangle("blend", json!({ "alphaMode": "BLEND" }), None);
+    let scene = Scene::load(&path).unwrap();
+    assert_eq!(scene.materials[0].alpha_mode, AlphaMode::Opaque);
+    assert!(scene.warnings.iter().any(|w| w.contains("BLEND")), "{:?}", scene.warnings);
+}
+
+#[test]
+fn normal_texture_transform_is_read() {
+    let material = json!({
+        "normalTexture": {
+            "index": 0, "scale": 0.5,
+            "extensions": { "KHR_texture_transform": { "offset": [0.25, 0.5], "rotation": 1.0, "scale": [2.0, 4.0] } }
+        },
+    });
+    let scene = Scene::load(&textured_triangle("normal-transform", material, None)).unwrap();
+    let (texture, scale) = scene.materials[0].normal_texture.unwrap();
+    assert_eq!(scale, 0.5);
+    assert_eq!(texture.transform, UvTransform::new([0.25, 0.5], 1.0, [2.0, 4.0]));
+}
+
+#[test]
+fn tangents_are_derived_from_uvs_or_read() {
+    // u along +x and v along +y on a triangle facing +z: tangent +x, bitangent +y (w = 1).
+    let scene = Scene::load(&textured_triangle("derived-tangents", json!({}), None)).unwrap();
+    assert_eq!(scene.objects[0].tangents, vec![rrf_baker::glam::Vec4::new(1.0, 0.0, 0.0, 1.0); 3]);
+    let material = json!({ "normalTexture": { "index": 0 } });
+    let tangents = vec![0.0, 1.0, 0.0, -1.0, 0.0, 1.0, 0.0, -1.0, 0.0, 1.0, 0.0, -1.0];
+    let scene = Scene::load(&textured_triangle("tangents", material, Some(("TANGENT", tangents, "VEC4")))).unwrap();
+    // Read as written (the node has no transform).
+    assert_eq!(scene.objects[0].tangents, vec![rrf_baker::glam::Vec4::new(0.0, 1.0, 0.0, -1.0); 3]);
 }

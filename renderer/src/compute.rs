@@ -5,10 +5,10 @@
 use ash::vk;
 
 use crate::context::Context;
-use crate::error::{Result, VkContext};
-use crate::guard::Destroy;
 pub use crate::descriptors::Bind;
 use crate::descriptors::BoundSet;
+use crate::error::{Result, VkContext};
+use crate::guard::Destroy;
 use crate::resources::Buffer;
 
 /// Specialization constant values: word `i` is the 32-bit value of `constant_id = i`.
@@ -60,12 +60,8 @@ impl ComputePass {
     ) -> Result<Self> {
         let device = &ctx.device;
         // Made step by step; a failed step destroys what was made (null handles are skipped).
-        let mut pass = ctx.guard(ComputePass {
-            pipelines: Vec::new(),
-            layout: vk::PipelineLayout::null(),
-            set: None,
-            workgroup,
-        });
+        let mut pass =
+            ctx.guard(ComputePass { pipelines: Vec::new(), layout: vk::PipelineLayout::null(), set: None, workgroup });
         let set = pass.set.insert(BoundSet::new(ctx, name, bindings, vk::ShaderStageFlags::COMPUTE)?);
         let set_layouts = [set.layout];
         // SAFETY: all create infos are valid and outlive their calls; every object is

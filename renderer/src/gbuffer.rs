@@ -58,6 +58,9 @@ pub struct SurfaceMaterial {
     pub factors: [f32; 4],
     /// Base colour, metallic-roughness, normal and emissive textures.
     pub textures: [TextureRef; 4],
+    /// 1 when the material emits from its back face too (glTF `doubleSided`), else 0.
+    pub emits_back: u32,
+    pub pad: [u32; 3],
 }
 
 /// The most objects and materials the packed G-buffer tells apart (16 and 15 bits).
@@ -77,7 +80,8 @@ pub struct GBufferTexel {
     pub base_color: [f32; 3],
     pub roughness: f32,
     pub metallic: f32,
-    /// The emissive texture's value (1 without one): it multiplies the material's emission.
+    /// The emissive texture's value (1 without one), 0 on a face that does not emit: it
+    /// multiplies the material's emission.
     pub emissive_texture: [f32; 3],
 }
 
@@ -166,7 +170,13 @@ impl GBufferTargets {
             }
             ctx.transition(cmd, &depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
         })?;
-        Ok(GBufferTargets { surface: surface.keep(), id: id.keep(), shading: shading.keep(), depth: depth.keep(), extent })
+        Ok(GBufferTargets {
+            surface: surface.keep(),
+            id: id.keep(),
+            shading: shading.keep(),
+            depth: depth.keep(),
+            extent,
+        })
     }
 
     fn colors(&self) -> [&Image; 3] {
@@ -283,7 +293,11 @@ impl GBufferMesh {
             return Err(Error::Invalid(format!("mesh index {bad} is past its {} vertices", vertices.len())));
         }
         if let Some(bad) = vertices.iter().find(|v| v.material as usize >= materials.len().max(1)) {
-            return Err(Error::Invalid(format!("vertex material {} is past the {} materials", bad.material, materials.len())));
+            return Err(Error::Invalid(format!(
+                "vertex material {} is past the {} materials",
+                bad.material,
+                materials.len()
+            )));
         }
         let max = u64::from(ctx.info.limits.max_storage_buffer_range);
         if texels.len() as u64 * 4 > max {
@@ -297,9 +311,13 @@ impl GBufferMesh {
         let none = [SurfaceMaterial::default()];
         let material_bytes: &[u8] = bytemuck::cast_slice(if materials.is_empty() { &none } else { materials });
         let texel_bytes: &[u8] = if texels.is_empty() { &[0; 4] } else { bytemuck::cast_slice(texels) };
-        let materials =
-            ctx.guard(ctx.create_buffer_with_data("materials", material_bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?);
-        let texels = ctx.guard(ctx.create_buffer_with_data("texels", texel_bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?);
+        let materials = ctx.guard(ctx.create_buffer_with_data(
+            "materials",
+            material_bytes,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?);
+        let texels =
+            ctx.guard(ctx.create_buffer_with_data("texels", texel_bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?);
         let mut bytes: Vec<u8> = bytemuck::cast_slice(vertices).to_vec();
         let index_offset = bytes.len() as u64;
         bytes.extend_from_slice(bytemuck::cast_slice(indices));
@@ -405,10 +423,7 @@ impl GBufferPass {
                     .offset(12),
                 vk::VertexInputAttributeDescription::default().location(2).format(vk::Format::R32_UINT).offset(48),
                 vk::VertexInputAttributeDescription::default().location(3).format(vk::Format::R32_UINT).offset(52),
-                vk::VertexInputAttributeDescription::default()
-                    .location(4)
-                    .format(vk::Format::R32G32_SFLOAT)
-                    .offset(24),
+                vk::VertexInputAttributeDescription::default().location(4).format(vk::Format::R32G32_SFLOAT).offset(24),
                 vk::VertexInputAttributeDescription::default()
                     .location(5)
                     .format(vk::Format::R32G32B32A32_SFLOAT)

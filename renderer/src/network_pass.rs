@@ -279,7 +279,7 @@ impl NetworkPass {
     /// reads `gbuffer`. With `display` (an RGBA8 storage image of the G-buffer's size), the
     /// pass writes only that: the component shown, tonemapped, as a window shows it; the
     /// storage variant cannot. `materials` holds each material's emitted radiance (rgb, before
-    /// its emissive texture) and an unused fourth value.
+    /// its emissive texture) and its `KHR_materials_specular` factor.
     pub fn new(
         ctx: &Context,
         variant: Variant,

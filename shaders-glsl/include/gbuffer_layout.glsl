@@ -10,7 +10,7 @@
 //                       g, b; and w roughness, metallic as 16-bit unorms
 //
 // The emissive texture multiplies the material's emission, in the materials buffer the
-// network passes bind.
+// network passes bind; it is 0 on a face that does not emit.
 #ifndef RRF_GBUFFER_LAYOUT_GLSL
 #define RRF_GBUFFER_LAYOUT_GLSL
 
@@ -46,10 +46,6 @@ uint id_object(uint id) {
 
 uint id_material(uint id) {
     return (id >> 16) & 0x7fffu;
-}
-
-bool id_front(uint id) {
-    return (id & 0x80000000u) != 0u;
 }
 
 struct Shading {

@@ -17,6 +17,7 @@ struct SurfaceMaterial {
     vec4 base_color;  // rgb factor, a alpha factor
     vec4 factors;     // metallic, roughness, normal scale, alpha cutoff (negative: opaque)
     TextureRef textures[4]; // base colour, metallic-roughness, normal, emissive
+    uint emits_back;  // 1: emits from the back face too (glTF doubleSided)
 };
 
 layout(std430, set = 0, binding = 0) readonly buffer Materials { SurfaceMaterial materials[]; };

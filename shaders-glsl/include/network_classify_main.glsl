@@ -16,7 +16,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "gbuffer_layout.glsl"
 
 layout(binding = 0, r32ui) uniform readonly uimage2D gbuffer_id;
-// Per material: rgb emitted radiance (before the emissive texture), w unused.
+// Per material: rgb emitted radiance (before the emissive texture), w specular factor.
 layout(std430, binding = 1) readonly buffer Materials { vec4 materials[]; };
 layout(binding = 2, rgba32ui) uniform readonly uimage2D gbuffer_shading;
 // 1 where object (id - 1) has networks.
@@ -59,7 +59,7 @@ void main() {
             atomicOr(seen[(id - 1u) / 32u], 1u << ((id - 1u) % 32u));
         } else {
             vec3 emission = vec3(0.0);
-            if (id > 0u && id_front(packed)) {
+            if (id > 0u) {
                 Shading shading = decode_shading(imageLoad(gbuffer_shading, pixel));
                 emission = materials[id_material(packed)].rgb * shading.emissive_texture;
             }

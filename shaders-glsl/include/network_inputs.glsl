@@ -11,16 +11,24 @@
 
 layout(binding = 0, rgba32ui) uniform readonly uimage2D gbuffer_surface;
 layout(binding = 1, r32ui) uniform readonly uimage2D gbuffer_id;
-// Per material: rgb emitted radiance (before the emissive texture), w unused.
+// Per material: rgb emitted radiance (before the emissive texture), w the
+// KHR_materials_specular factor.
 layout(std430, binding = 2) readonly buffer Materials { vec4 materials[]; };
 layout(binding = 3, rgba32ui) uniform readonly uimage2D gbuffer_shading;
 
 // What the pixel's surface emits towards the viewer.
 vec3 surface_emission(ivec2 pixel, uint id) {
-    if (!id_front(id)) {
-        return vec3(0.0);
-    }
     return materials[id_material(id)].rgb * decode_shading(imageLoad(gbuffer_shading, pixel)).emissive_texture;
+}
+
+// What the networks' outputs are multiplied by: the surface's reflectance, the twin of
+// `reflectance` in baker/src/network.rs.
+vec3 surface_reflectance(ivec2 pixel, uint id) {
+    Shading s = decode_shading(imageLoad(gbuffer_shading, pixel));
+    float specular = materials[id_material(id)].w;
+    vec3 diffuse = s.base_color * (1.0 - s.metallic);
+    vec3 f0 = mix(vec3(0.04 * specular), s.base_color, s.metallic);
+    return max(diffuse + f0, vec3(MIN_REFLECTANCE));
 }
 
 // tanh as x·P(x²)/Q(x²) on [-9, 9], a rational least-squares fit made for rrf (maximum

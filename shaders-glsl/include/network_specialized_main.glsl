@@ -57,8 +57,9 @@ void main() {
         return;
     }
     float x[INPUTS] = raw_inputs(pixel, id, constants.eye.xyz, constants.light.xyz);
-    vec3 direct = direct_network(x);
-    vec3 indirect = indirect_network(x);
+    vec3 reflectance = surface_reflectance(pixel, id);
+    vec3 direct = direct_network(x) * reflectance;
+    vec3 indirect = indirect_network(x) * reflectance;
 #ifdef DISPLAY
     vec3 shown = constants.shown == 1u ? direct
                : constants.shown == 2u ? indirect

@@ -230,7 +230,9 @@ pub fn bake(
     let dropped_before = non_finite_dropped();
     let corrupt = AtomicUsize::new(0);
     let settings_json = serde_json::to_string(&SamplingKey::from(settings)).expect("settings serialise");
+    // The format version says what the samples' targets are (radiance over reflectance now).
     let mut key = Fnv64::default();
+    key.write(&FORMAT_VERSION.to_le_bytes());
     key.write(&scene.content_hash.to_le_bytes());
     key.write(settings_json.as_bytes());
     let shards = Shards {
@@ -334,6 +336,7 @@ pub fn bake(
         .par_iter()
         .map(|&(object, component)| {
             let mut key = Fnv64::default();
+            key.write(&FORMAT_VERSION.to_le_bytes());
             key.write(&scene.content_hash.to_le_bytes());
             key.write(settings_key.as_bytes());
             key.write(&[component as u8]);

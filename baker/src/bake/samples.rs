@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use crate::network::{raw_inputs, Component, INPUTS};
+use crate::network::{raw_inputs, reflectance, Component, INPUTS};
 use crate::scene::{Aabb, Scene};
 use crate::trace::integrator::radiance_leaving;
 use crate::trace::sampling::{mix64, uniform_sphere, Rng};
@@ -152,7 +152,8 @@ fn sample_along(
     let material = &world.scene.materials[world.geometry.triangles[hit.triangle as usize].material as usize];
     // Emitters show their emission and learn nothing; the inside of a closed one-sided
     // surface is never seen.
-    if material.is_plain_emitter() || (!si.front_face && !material.double_sided) || only.is_some_and(|o| o != si.object) {
+    if material.is_plain_emitter() || (!si.front_face && !material.double_sided) || only.is_some_and(|o| o != si.object)
+    {
         return None;
     }
     let mut sum = Radiance::default();
@@ -161,11 +162,13 @@ fn sample_along(
         sum += radiance_leaving(world, &si, -dir, trace, &mut path_rng);
     }
     let mean = sum.scaled(1.0 / paths.max(1) as f32);
+    // The networks learn radiance over the surface's reflectance (`network::reflectance`).
+    let r = reflectance(si.bsdf.base_color, si.bsdf.metallic, si.bsdf.specular);
     Some(Sample {
         object: si.object,
         inputs: raw_inputs(si.position, -dir, config.light, si.shading_normal, si.roughness),
-        direct: mean.direct.to_array(),
-        indirect: mean.indirect.to_array(),
+        direct: (mean.direct / r).to_array(),
+        indirect: (mean.indirect / r).to_array(),
     })
 }
 

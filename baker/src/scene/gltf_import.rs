@@ -18,8 +18,8 @@ use super::external;
 use super::sidecar::{Aabb, Sidecar};
 use super::texture::{ColorSpace, Texture, TextureRef, UvTransform};
 use super::{
-    AlphaMode, Cone, LightKind, Material, MovingLight, Object, Part, PointLight, PointLightUnits, Scene, View, CANDELA_PER_WATT,
-    MAX_COORDINATE, MAX_EMISSION,
+    AlphaMode, Cone, LightKind, Material, MovingLight, Object, Part, PointLight, PointLightUnits, Scene, View,
+    CANDELA_PER_WATT, MAX_COORDINATE, MAX_EMISSION,
 };
 
 /// Extensions a file may list in `extensionsRequired`.
@@ -75,7 +75,8 @@ pub(super) fn import(
         textures: Vec::new(),
         texture_ids: HashMap::new(),
     };
-    let mut materials: Vec<Material> = document.materials().map(|m| importer.material(&m, document.as_json())).collect::<Result<_, _>>()?;
+    let mut materials: Vec<Material> =
+        document.materials().map(|m| importer.material(&m, document.as_json())).collect::<Result<_, _>>()?;
     let default_material = materials.len() as u32;
     let uses_default = document.meshes().flat_map(|m| m.primitives()).any(|p| p.material().index().is_none());
     // glTF's default material, for primitives without one: white, fully metallic, fully rough.
@@ -483,9 +484,8 @@ impl Importer<'_> {
         if tex_coord != 0 {
             self.warnings.push(format!("material {material:?}: texture uses TEXCOORD_{tex_coord}; UV0 is used"));
         }
-        let transform = transform.map_or(UvTransform::IDENTITY, |(offset, rotation, scale, _)| {
-            UvTransform::new(offset, rotation, scale)
-        });
+        let transform = transform
+            .map_or(UvTransform::IDENTITY, |(offset, rotation, scale, _)| UvTransform::new(offset, rotation, scale));
         TextureRef { texture: self.decoded(texture.source().index(), space), transform }
     }
 
@@ -603,7 +603,9 @@ impl Importer<'_> {
                 let to_world = Mat3::from_mat4(world);
                 let handedness = if flip { -1.0 } else { 1.0 };
                 t.map(|[x, y, z, w]| {
-                    (to_world * Vec3::new(x, y, z)).normalize_or(Vec3::X).extend(if w < 0.0 { -1.0 } else { 1.0 } * handedness)
+                    (to_world * Vec3::new(x, y, z))
+                        .normalize_or(Vec3::X)
+                        .extend(if w < 0.0 { -1.0 } else { 1.0 } * handedness)
                 })
                 .collect()
             });

@@ -171,7 +171,9 @@ impl Geometry {
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[(u32, RtTriangle)], covers: Covers) -> bool {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
         if !self.bvh_triangles.is_empty()
-            && !self.bvh.ray_traverse_miss(ray, |r, i| self.test(self.bvh_ids[i], self.bvh_triangles[i].intersect(r), covers))
+            && !self
+                .bvh
+                .ray_traverse_miss(ray, |r, i| self.test(self.bvh_ids[i], self.bvh_triangles[i].intersect(r), covers))
         {
             return true;
         }

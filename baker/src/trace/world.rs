@@ -227,7 +227,8 @@ impl<'a> World<'a> {
             return None;
         }
         let pdf = e.probability / e.area * distance2 / cos_light.abs();
-        let texture = e.texture.map_or(Vec3::ONE, |t| t.sample(&self.scene.textures, interpolate(e.uvs, weights)).truncate());
+        let texture =
+            e.texture.map_or(Vec3::ONE, |t| t.sample(&self.scene.textures, interpolate(e.uvs, weights)).truncate());
         Some(LightSample { direction, distance, radiance: e.emission * texture, pdf: Some(pdf) })
     }
 
@@ -273,7 +274,8 @@ where
 /// interpolated `normal` and `tangent` (xyz, and the bitangent's sign in w), as glTF says.
 /// The GPU's twin is in `gbuffer.frag`.
 pub fn normal_mapped(normal: Vec3, tangent: Vec4, m: Vec3) -> Vec3 {
-    let t = (tangent.truncate() - normal * normal.dot(tangent.truncate())).normalize_or(normal.any_orthonormal_vector());
+    let t =
+        (tangent.truncate() - normal * normal.dot(tangent.truncate())).normalize_or(normal.any_orthonormal_vector());
     let b = normal.cross(t) * if tangent.w < 0.0 { -1.0 } else { 1.0 };
     (t * m.x + b * m.y + normal * m.z).normalize_or(normal)
 }

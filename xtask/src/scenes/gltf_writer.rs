@@ -19,13 +19,36 @@ pub struct MaterialDesc {
     pub emission: [f32; 3],
     /// A PNG written beside the glTF, used as the base colour texture.
     pub texture: Option<(&'static str, image::RgbaImage)>,
+    /// `KHR_texture_transform` of the base colour texture: offset, rotation, scale.
+    pub texture_transform: Option<([f32; 2], f32, [f32; 2])>,
+    /// Metallic-roughness, normal (with its scale) and emissive textures.
+    pub metallic_roughness_texture: Option<(&'static str, image::RgbaImage)>,
+    pub normal_texture: Option<(&'static str, image::RgbaImage, f32)>,
+    pub emissive_texture: Option<(&'static str, image::RgbaImage)>,
+    /// `alphaMode` MASK with this `alphaCutoff`.
+    pub alpha_cutoff: Option<f32>,
+    pub double_sided: bool,
     /// `KHR_materials_specular` factor; `Some(0.0)` makes a pure Lambert surface.
     pub specular: Option<f32>,
 }
 
 impl MaterialDesc {
     pub fn diffuse(name: &'static str, base_color: [f32; 3]) -> Self {
-        Self { name, base_color, metallic: 0.0, roughness: 1.0, emission: [0.0; 3], texture: None, specular: None }
+        Self {
+            name,
+            base_color,
+            metallic: 0.0,
+            roughness: 1.0,
+            emission: [0.0; 3],
+            texture: None,
+            texture_transform: None,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            emissive_texture: None,
+            alpha_cutoff: None,
+            double_sided: false,
+            specular: None,
+        }
     }
 
     /// Pure Lambert: no specular lobe at all.
@@ -70,13 +93,30 @@ impl GltfBuilder {
             "roughnessFactor": m.roughness,
         });
         if let Some((file, image)) = m.texture {
-            let index = self.textures.len();
-            self.images.push(json!({ "uri": file }));
-            self.textures.push(json!({ "source": self.images.len() - 1, "sampler": 0 }));
-            self.pngs.push((file, image));
-            pbr["baseColorTexture"] = json!({ "index": index });
+            pbr["baseColorTexture"] = json!({ "index": self.texture(file, image) });
+            if let Some((offset, rotation, scale)) = m.texture_transform {
+                pbr["baseColorTexture"]["extensions"] = json!({
+                    "KHR_texture_transform": { "offset": offset, "rotation": rotation, "scale": scale }
+                });
+            }
+        }
+        if let Some((file, image)) = m.metallic_roughness_texture {
+            pbr["metallicRoughnessTexture"] = json!({ "index": self.texture(file, image) });
         }
         let mut material = json!({ "name": m.name, "pbrMetallicRoughness": pbr });
+        if let Some((file, image, scale)) = m.normal_texture {
+            material["normalTexture"] = json!({ "index": self.texture(file, image), "scale": scale });
+        }
+        if let Some((file, image)) = m.emissive_texture {
+            material["emissiveTexture"] = json!({ "index": self.texture(file, image) });
+        }
+        if let Some(cutoff) = m.alpha_cutoff {
+            material["alphaMode"] = json!("MASK");
+            material["alphaCutoff"] = json!(cutoff);
+        }
+        if m.double_sided {
+            material["doubleSided"] = json!(true);
+        }
         let mut extensions = serde_json::Map::new();
         let strength = m.emission.iter().copied().fold(0.0f32, f32::max);
         if strength > 0.0 {
@@ -93,6 +133,14 @@ impl GltfBuilder {
         }
         self.materials.push(material);
         self.materials.len() - 1
+    }
+
+    /// A texture of its own for the PNG `image`, written as `file`.
+    fn texture(&mut self, file: &'static str, image: image::RgbaImage) -> usize {
+        self.images.push(json!({ "uri": file }));
+        self.textures.push(json!({ "source": self.images.len() - 1, "sampler": 0 }));
+        self.pngs.push((file, image));
+        self.textures.len() - 1
     }
 
     /// Adds `mesh` as a node of its own, named `name`, at `translation`.
@@ -133,6 +181,35 @@ impl GltfBuilder {
         self.node(json!({
             "name": name,
             "translation": position.to_array(),
+            "extensions": { "KHR_lights_punctual": { "light": self.lights.len() - 1 } },
+        }))
+    }
+
+    /// A KHR_lights_punctual spot light at `position` shining along `direction`, its cone
+    /// between `inner` and `outer` (radians); `intensity` as for [`GltfBuilder::point_light`].
+    pub fn spot_light(
+        &mut self,
+        name: &str,
+        position: Vec3,
+        direction: Vec3,
+        intensity: [f32; 3],
+        inner: f32,
+        outer: f32,
+    ) -> usize {
+        let strength = intensity.iter().copied().fold(0.0f32, f32::max);
+        self.lights.push(json!({
+            "name": name,
+            "type": "spot",
+            "color": intensity.map(|c| c / strength),
+            "intensity": strength * 683.0,
+            "spot": { "innerConeAngle": inner, "outerConeAngle": outer },
+        }));
+        // glTF lights shine down the node's -z.
+        let rotation = Quat::from_rotation_arc(Vec3::NEG_Z, direction.normalize());
+        self.node(json!({
+            "name": name,
+            "translation": position.to_array(),
+            "rotation": rotation.to_array(),
             "extensions": { "KHR_lights_punctual": { "light": self.lights.len() - 1 } },
         }))
     }
@@ -196,6 +273,10 @@ impl GltfBuilder {
             if self.materials.iter().any(|m| m.get("extensions").and_then(|e| e.get(ext)).is_some()) {
                 used.push(ext);
             }
+        }
+        let transform = |m: &Value| m["pbrMetallicRoughness"]["baseColorTexture"]["extensions"].is_object();
+        if self.materials.iter().any(transform) {
+            used.push("KHR_texture_transform");
         }
         let mut root = json!({
             "asset": { "version": "2.0", "generator": "rrf xtask scenes" },

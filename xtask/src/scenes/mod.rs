@@ -3,6 +3,7 @@
 //! sidecar `scene.toml`.
 
 mod cornell_box;
+mod gallery;
 mod glossy_room;
 mod gltf_writer;
 mod many_objects;
@@ -14,8 +15,9 @@ use std::path::Path;
 type SceneBuilder = fn() -> (gltf_writer::GltfBuilder, String);
 
 pub fn generate(root: &Path) -> Result<(), String> {
-    let scenes: [(&str, SceneBuilder); 3] = [
+    let scenes: [(&str, SceneBuilder); 4] = [
         ("cornell-box", cornell_box::build),
+        ("gallery", gallery::build),
         ("glossy-room", glossy_room::build),
         ("many-objects", many_objects::build),
     ];
