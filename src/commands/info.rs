@@ -113,9 +113,10 @@ fn scene_info(path: &Path, json: bool) -> Result<()> {
         );
     }
     for o in scene.area_lights() {
-        let emission =
-            o.parts.iter().map(|p| scene.materials[p.material as usize].emission).fold(Vec3::ZERO, Vec3::max);
-        println!("  area   {:<16} radiance {:?}", o.name, emission.to_array());
+        let materials = || o.parts.iter().map(|p| &scene.materials[p.material as usize]);
+        let emission = materials().map(|m| m.emission).fold(Vec3::ZERO, Vec3::max);
+        let textured = if materials().any(|m| m.emissive_texture.is_some()) { " × emissive texture" } else { "" };
+        println!("  area   {:<16} radiance {:?}{textured}", o.name, emission.to_array());
     }
     println!("\nviews");
     for v in &scene.views {
