@@ -135,7 +135,7 @@ fn a_bad_script_names_the_file_and_line() {
 
 #[test]
 fn shipped_demo_scripts_parse() {
-    for scene in ["cornell-box", "glossy-room", "many-objects"] {
+    for scene in ["cornell-box", "glossy-room", "many-objects", "gallery"] {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene).join("demo.txt");
         let script = rrf::viewer::script::Script::load(&path).unwrap();
         assert!(script.frames() > 60, "{scene}'s demo is too short");

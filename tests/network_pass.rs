@@ -98,6 +98,13 @@ fn gpu_matches_cpu_inference_many_objects() {
     compare("many-objects", "table", Vec3::new(0.8, 2.2, -0.5), 120, 80);
 }
 
+/// Textured surfaces, whose networks' output the G-buffer's reflectance multiplies, a normal
+/// map, alpha-masked leaves and a textured emitter.
+#[test]
+fn gpu_matches_cpu_inference_gallery() {
+    compare("gallery", "plant", Vec3::new(-1.0, 2.5, -0.5), 120, 90);
+}
+
 /// The display frame (the walkthrough's: the network pass tonemaps and writes the display
 /// image itself) against the radiance frame tonemapped on the CPU, every component.
 #[test]

@@ -281,8 +281,9 @@ pub fn normal_mapped(normal: Vec3, tangent: Vec4, m: Vec3) -> Vec3 {
 }
 
 /// The mean luminance of emissive texture `t` over a triangle of corner UVs `uvs`, from 16
-/// fixed points, with a floor of 1/64 so that no part of a textured emitter is never sampled
-/// (which would bias the estimate where the points missed a bright texel).
+/// fixed points: the triangle is picked for light sampling in proportion to its area times
+/// this. Its floor of 1/64 keeps every emitting triangle samplable where the 16 points missed
+/// its bright texels (a zero probability would bias the estimate).
 fn textured_share(scene: &Scene, t: TextureRef, uvs: [Vec2; 3]) -> f32 {
     let mut sum = 0.0;
     for i in 0..16 {
