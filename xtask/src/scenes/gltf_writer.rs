@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use glam::{Mat3, Quat, Vec3};
+use glam::{Mat3, Quat, Vec3, Vec4};
 use serde_json::{json, Value};
 
 use super::shapes::Mesh;
@@ -82,6 +82,8 @@ pub struct GltfBuilder {
     cameras: Vec<Value>,
     lights: Vec<Value>,
     pngs: Vec<(&'static str, image::RgbaImage)>,
+    /// Per material: whether it has a normal map, so that its meshes need tangents.
+    normal_mapped: Vec<bool>,
     pub triangles: usize,
 }
 
@@ -104,6 +106,7 @@ impl GltfBuilder {
             pbr["metallicRoughnessTexture"] = json!({ "index": self.texture(file, image) });
         }
         let mut material = json!({ "name": m.name, "pbrMetallicRoughness": pbr });
+        self.normal_mapped.push(m.normal_texture.is_some());
         if let Some((file, image, scale)) = m.normal_texture {
             material["normalTexture"] = json!({ "index": self.texture(file, image), "scale": scale });
         }
@@ -155,15 +158,15 @@ impl GltfBuilder {
         let positions = self.accessor(bytes_of(&mesh.positions), n, "VEC3", 5126, Some((lo, hi)), 34962);
         let normals = self.accessor(bytes_of(&mesh.normals), n, "VEC3", 5126, None, 34962);
         let uvs = self.accessor(bytes_of(&mesh.uvs), n, "VEC2", 5126, None, 34962);
+        let mut attributes = json!({ "POSITION": positions, "NORMAL": normals, "TEXCOORD_0": uvs });
+        if self.normal_mapped[material] {
+            attributes["TANGENT"] = json!(self.accessor(bytes_of(&tangents(mesh)), n, "VEC4", 5126, None, 34962));
+        }
         let index_bytes: Vec<u8> = mesh.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
         let indices = self.accessor(index_bytes, mesh.indices.len(), "SCALAR", 5125, None, 34963);
         self.meshes.push(json!({
             "name": name,
-            "primitives": [{
-                "attributes": { "POSITION": positions, "NORMAL": normals, "TEXCOORD_0": uvs },
-                "indices": indices,
-                "material": material,
-            }],
+            "primitives": [{ "attributes": attributes, "indices": indices, "material": material }],
         }));
         self.node(json!({ "name": name, "mesh": self.meshes.len() - 1, "translation": translation.to_array() }))
     }
@@ -315,6 +318,32 @@ impl GltfBuilder {
         }
         Ok(())
     }
+}
+
+/// Per-vertex tangents for a normal map, as exporters write them: each triangle's direction of
+/// increasing u, summed at its corners and made orthogonal to the normal; w is the handedness
+/// of the direction of increasing v.
+fn tangents(mesh: &Mesh) -> Vec<Vec4> {
+    let mut sums = vec![(Vec3::ZERO, Vec3::ZERO); mesh.positions.len()];
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
+        let (e1, e2) = (mesh.positions[b] - mesh.positions[a], mesh.positions[c] - mesh.positions[a]);
+        let (d1, d2) = (mesh.uvs[b] - mesh.uvs[a], mesh.uvs[c] - mesh.uvs[a]);
+        let det = d1.x * d2.y - d2.x * d1.y;
+        if det.abs() > 1e-12 {
+            for v in [a, b, c] {
+                sums[v].0 += (e1 * d2.y - e2 * d1.y) / det;
+                sums[v].1 += (e2 * d1.x - e1 * d2.x) / det;
+            }
+        }
+    }
+    sums.iter()
+        .zip(&mesh.normals)
+        .map(|(&(t, b), &n)| {
+            let t = (t - n * n.dot(t)).try_normalize().unwrap_or_else(|| n.any_orthonormal_vector());
+            t.extend(if n.cross(t).dot(b) < 0.0 { -1.0 } else { 1.0 })
+        })
+        .collect()
 }
 
 fn bytes_of<T: Copy + Into<[f32; N]>, const N: usize>(values: &[T]) -> Vec<u8> {
