@@ -58,3 +58,20 @@ fn missing_scene_is_a_clear_error() {
     assert!(stderr.starts_with("error: scenes/no-such-scene: no such file or folder"), "{stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn gallery_materials_say_what_was_read() {
+    let out = rrf(&["info", "scenes/gallery", "--json"], &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let info: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let features = |name: &str| -> Vec<String> {
+        let materials = info["material_list"].as_array().unwrap();
+        let m = materials.iter().find(|m| m["name"] == name).unwrap_or_else(|| panic!("no {name} in {info}"));
+        serde_json::from_value(m["features"].clone()).unwrap()
+    };
+    assert_eq!(features("tiles"), ["base colour texture (transformed)"]);
+    assert_eq!(features("brick"), ["metallic-roughness texture", "normal texture"]);
+    assert_eq!(features("leaf"), ["base colour texture", "alpha mask (cutoff 0.5)", "double-sided"]);
+    assert_eq!(features("screen"), ["emissive texture", "double-sided", "emits [3.0, 3.0, 3.0]"]);
+    assert!(features("plaster").is_empty());
+}

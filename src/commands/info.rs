@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::Result;
 use rrf_baker::glam::Vec3;
-use rrf_baker::scene::{LightKind, Scene};
+use rrf_baker::scene::{AlphaMode, LightKind, Material, Scene, TextureRef, UvTransform};
 use rrf_renderer::{Context, ContextOptions};
 use serde_json::json;
 
@@ -32,6 +32,36 @@ fn device_info(json: bool) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// What a material uses beyond its constant factors: textures (with a transform), alpha mask,
+/// double sides, emission: what to check after an export.
+fn material_features(m: &Material) -> Vec<String> {
+    let texture = |name: &str, t: Option<TextureRef>| {
+        t.map(|t| {
+            let transformed = if t.transform == UvTransform::IDENTITY { "" } else { " (transformed)" };
+            format!("{name} texture{transformed}")
+        })
+    };
+    let mut features: Vec<String> = [
+        texture("base colour", m.base_color_texture),
+        texture("metallic-roughness", m.metallic_roughness_texture),
+        texture("normal", m.normal_texture.map(|n| n.0)),
+        texture("emissive", m.emissive_texture),
+    ]
+    .into_iter()
+    .flatten()
+    .collect();
+    if let AlphaMode::Mask { cutoff } = m.alpha_mode {
+        features.push(format!("alpha mask (cutoff {cutoff})"));
+    }
+    if m.double_sided {
+        features.push("double-sided".into());
+    }
+    if m.is_emissive() {
+        features.push(format!("emits {:?}", m.emission.to_array()));
+    }
+    features
 }
 
 fn scene_info(path: &Path, json: bool) -> Result<()> {
@@ -72,6 +102,9 @@ fn scene_info(path: &Path, json: bool) -> Result<()> {
             "object_list": scene.objects.iter().map(|o| json!({
                 "id": o.id, "name": o.name, "triangles": o.triangles.len(), "materials": material_names(o),
             })).collect::<Vec<_>>(),
+            "material_list": scene.materials.iter().map(|m| json!({
+                "name": m.name, "features": material_features(m),
+            })).collect::<Vec<_>>(),
             "warnings": scene.warnings,
         });
         println!("{summary}");
@@ -93,6 +126,11 @@ fn scene_info(path: &Path, json: bool) -> Result<()> {
     println!("\n  id  object                 triangles  materials");
     for o in &scene.objects {
         println!("{:>4}  {:<22} {:>9}  {}", o.id, o.name, o.triangles.len(), material_names(o).join(", "));
+    }
+    println!("\n  material               what rrf reads besides its factors");
+    for m in &scene.materials {
+        let features = material_features(m);
+        println!("  {:<22} {}", m.name, if features.is_empty() { "-".into() } else { features.join(", ") });
     }
     println!("\nlights");
     for l in &scene.point_lights {
