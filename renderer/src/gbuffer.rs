@@ -303,7 +303,7 @@ impl GBufferMesh {
         if texels.len() as u64 * 4 > max {
             return Err(Error::Invalid(format!(
                 "the textures' {} MiB exceed the device's largest storage buffer ({} MiB)",
-                texels.len() * 4 >> 20,
+                (texels.len() * 4) >> 20,
                 max >> 20
             )));
         }

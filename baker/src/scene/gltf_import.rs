@@ -426,7 +426,9 @@ impl Importer<'_> {
             return Err(SceneError::new(self.file, element, format!("{key} {shown} must be between 0 and {max}")));
         }
         let mut texture = |info: gltf::texture::Info, space| {
-            let transform = info.texture_transform().map(|t| (t.offset(), t.rotation(), t.scale(), t.tex_coord()));
+            let transform = info
+                .texture_transform()
+                .map(|t| (UvTransform::new(t.offset(), t.rotation(), t.scale()), t.tex_coord()));
             self.texture(&name, info.texture(), info.tex_coord(), transform, space)
         };
         let base_color_texture = pbr.base_color_texture().map(|t| texture(t, ColorSpace::Srgb));
@@ -470,22 +472,21 @@ impl Importer<'_> {
     }
 
     /// The texture of `texture` in colour space `space` (decoded once per image and space),
-    /// used through UV set `tex_coord` and the `KHR_texture_transform` values (offset,
-    /// rotation, scale, texCoord override).
+    /// used through UV set `tex_coord` and its `KHR_texture_transform`, if any: the transform
+    /// and its texCoord override.
     fn texture(
         &mut self,
         material: &str,
         texture: gltf::Texture,
         tex_coord: u32,
-        transform: Option<([f32; 2], f32, [f32; 2], Option<u32>)>,
+        transform: Option<(UvTransform, Option<u32>)>,
         space: ColorSpace,
     ) -> TextureRef {
-        let tex_coord = transform.and_then(|t| t.3).unwrap_or(tex_coord);
+        let tex_coord = transform.and_then(|t| t.1).unwrap_or(tex_coord);
         if tex_coord != 0 {
             self.warnings.push(format!("material {material:?}: texture uses TEXCOORD_{tex_coord}; UV0 is used"));
         }
-        let transform = transform
-            .map_or(UvTransform::IDENTITY, |(offset, rotation, scale, _)| UvTransform::new(offset, rotation, scale));
+        let transform = transform.map_or(UvTransform::IDENTITY, |t| t.0);
         TextureRef { texture: self.decoded(texture.source().index(), space), transform }
     }
 
@@ -752,13 +753,12 @@ fn derive_tangents(object: &mut Object, first_vertex: usize, first_triangle: usi
     }
 }
 
-/// The `KHR_texture_transform` (offset, rotation, scale, texCoord) of material `index`'s normal
-/// texture, if it has one.
-#[allow(clippy::type_complexity)]
+/// The `KHR_texture_transform` of material `index`'s normal texture, if it has one, and its
+/// texCoord override.
 fn normal_texture_transform(
     json: &gltf::json::Root,
     index: usize,
-) -> Result<Option<([f32; 2], f32, [f32; 2], Option<u32>)>, serde_json::Error> {
+) -> Result<Option<(UvTransform, Option<u32>)>, serde_json::Error> {
     let extension = json
         .materials
         .get(index)
@@ -767,7 +767,7 @@ fn normal_texture_transform(
         .and_then(|e| e.others.get("KHR_texture_transform"));
     let Some(value) = extension else { return Ok(None) };
     let t: gltf::json::extensions::texture::TextureTransform = serde_json::from_value(value.clone())?;
-    Ok(Some((t.offset.0, t.rotation.0, t.scale.0, t.tex_coord)))
+    Ok(Some((UvTransform::new(t.offset.0, t.rotation.0, t.scale.0), t.tex_coord)))
 }
 
 /// What an accessor is read as.
