@@ -4,13 +4,14 @@
 use std::io;
 use std::path::Path;
 
-/// Runs `write` on a temporary file beside `path` (`NAME.partial.EXT`: the same extension, so
-/// that encoders that go by it still work), then renames it to `path`. On any failure (a full
-/// disk, a kill before the rename) the temporary file is removed and whatever was at `path`
-/// is left as it was.
+/// Runs `write` on a temporary file beside `path` (`NAME.partial-PID.EXT`: the same extension,
+/// so that encoders that go by it still work, and this process's own, so that two processes
+/// writing the same file, as a cluster's retried job may, never write into one temporary),
+/// then renames it to `path`. On any failure (a full disk, a kill before the rename) the
+/// temporary file is removed and whatever was at `path` is left as it was.
 pub fn write_atomically<E: From<io::Error>>(path: &Path, write: impl FnOnce(&Path) -> Result<(), E>) -> Result<(), E> {
     let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("tmp");
-    let tmp = path.with_extension(format!("partial.{extension}"));
+    let tmp = path.with_extension(format!("partial-{}.{extension}", std::process::id()));
     let written = write(&tmp).and_then(|()| {
         std::fs::rename(&tmp, path)
             .map_err(|e| E::from(io::Error::new(e.kind(), format!("cannot write {}: {e}", path.display()))))

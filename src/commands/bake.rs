@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use rrf_baker::bake::lock::BakeLock;
-use rrf_baker::bake::{bake, BakeProgress, BakeSettings, Quality};
+use rrf_baker::bake::{bake_part, BakeProgress, BakeReport, BakeSettings, Part, Quality, Stage};
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
 use serde_json::json;
@@ -46,6 +46,42 @@ pub struct BakeArgs {
     /// Print one line of JSON with the figures of the bake.
     #[arg(long)]
     pub json: bool,
+    /// Run one stage of a bake split across processes or machines (a cluster's array jobs):
+    /// `sample`, then `aim`, then `train`, each needing every shard of the stages before, then
+    /// --merge. Needs --shard. Every process uses the same bake cache (MODEL.bake-cache/, on a
+    /// shared file system) and writes only its own files there; a re-run shard writes the same
+    /// bytes. README: "Bakes on a cluster".
+    #[arg(long, value_enum, requires = "shard")]
+    pub stage: Option<StageArg>,
+    /// The share of --stage this process runs, I/N (0 <= I < N): every N-th shard file or
+    /// network from the I-th.
+    #[arg(long, value_parser = parse_shard, requires = "stage", value_name = "I/N")]
+    pub shard: Option<(u32, u32)>,
+    /// Write the model from a bake cache that every stage has filled: the same bytes as a bake
+    /// in one process with the same seed.
+    #[arg(long, conflicts_with_all = ["stage", "shard"])]
+    pub merge: bool,
+}
+
+#[derive(ValueEnum, Clone, Copy, Debug)]
+pub enum StageArg {
+    /// Rays over the sphere from every configuration.
+    Sample,
+    /// Rays aimed at the objects that sampling rarely hit.
+    Aim,
+    /// The networks.
+    Train,
+}
+
+/// `I/N` with 0 <= I < N <= 65,536.
+fn parse_shard(text: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("{text:?}: expected I/N with 0 <= I < N <= 65536, e.g. 0/4");
+    let (i, n) = text.split_once('/').ok_or_else(bad)?;
+    let (i, n): (u32, u32) = (i.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+    if i >= n || n > 65_536 {
+        return Err(bad());
+    }
+    Ok((i, n))
 }
 
 struct Bars {
@@ -86,9 +122,34 @@ fn check_output(output: &Path) -> Result<()> {
     Ok(())
 }
 
+/// What a stage's shard did, in a line (of JSON with `--json`).
+fn report_stage(args: &BakeArgs, cache: &Path, part: Part, report: &BakeReport) -> Result<()> {
+    let Part::Stage { stage, index, count } = part else { return Ok(()) };
+    if args.json {
+        let line = json!({
+            "stage": stage.name(), "shard": index, "shards": count, "cache": cache,
+            "sample_files": report.shards, "sample_files_found": report.resumed_shards,
+            "networks": report.networks, "networks_found": report.resumed_networks,
+            "corrupt_cache_files": report.corrupt_files,
+        });
+        println!("{line}");
+        return Ok(());
+    }
+    let (done, found, what) = match stage {
+        Stage::Sample | Stage::Aim => (report.shards, report.resumed_shards, "sample files"),
+        Stage::Train => (report.networks, report.resumed_networks, "networks"),
+    };
+    eprintln!(
+        "stage {} shard {index}/{count}: {done} {what} in {} ({found} were there already)",
+        stage.name(),
+        cache.display()
+    );
+    Ok(())
+}
+
 /// Ctrl-C ends the bake at once: everything finished is already in the cache (every cache
 /// file is written whole or not at all), so nothing is lost. Says how to resume.
-fn stop_on_ctrl_c(lock: PathBuf, cache: &Path) {
+fn stop_on_ctrl_c(lock: Option<PathBuf>, cache: &Path) {
     let command: Vec<String> = std::iter::once("rrf".to_string()).chain(std::env::args().skip(1)).collect();
     let message = format!(
         "\ninterrupted: finished samples and networks are kept in {}; to resume, run the same command again:\n  {}",
@@ -96,7 +157,9 @@ fn stop_on_ctrl_c(lock: PathBuf, cache: &Path) {
         command.join(" ")
     );
     let handler = move || {
-        let _ = std::fs::remove_file(&lock);
+        if let Some(lock) = &lock {
+            let _ = std::fs::remove_file(lock);
+        }
         eprintln!("{message}");
         std::process::exit(130);
     };
@@ -119,15 +182,35 @@ pub fn run(args: &BakeArgs) -> Result<()> {
     let output = args.output.clone().unwrap_or_else(|| scene.model_file());
     check_output(&output)?;
     let cache = output.with_extension("bake-cache");
-    let lock = BakeLock::acquire(&output)?;
-    stop_on_ctrl_c(lock.path().to_path_buf(), &cache);
+    let part = match (args.stage, args.shard, args.merge) {
+        (Some(stage), Some((index, count)), _) => {
+            let stage = match stage {
+                StageArg::Sample => Stage::Sample,
+                StageArg::Aim => Stage::Aim,
+                StageArg::Train => Stage::Train,
+            };
+            Part::Stage { stage, index, count }
+        }
+        (_, _, true) => Part::Merge,
+        _ => Part::Whole,
+    };
+    // Shards of a stage run side by side and write only their own cache files; the model is
+    // written by one process, under the lock.
+    let lock = match part {
+        Part::Stage { .. } => None,
+        Part::Whole | Part::Merge => Some(BakeLock::acquire(&output)?),
+    };
+    stop_on_ctrl_c(lock.as_ref().map(|l| l.path().to_path_buf()), &cache);
     let bars = Bars {
         sampling: Progress::new(u64::from(settings.configurations), "sampling", args.json),
         training: Progress::new(1, "training", args.json),
     };
-    let (model, report) = bake(&scene, &settings, &cache, &bars)?;
+    let (model, report) = bake_part(&scene, &settings, &cache, &bars, part)?;
     bars.sampling.finish();
     bars.training.finish();
+    let Some(model) = model else {
+        return report_stage(args, &cache, part, &report);
+    };
     model.save(&output)?;
     if !args.keep_samples {
         std::fs::remove_dir_all(&cache).with_context(|| format!("cannot remove {}", cache.display()))?;

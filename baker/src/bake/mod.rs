@@ -6,6 +6,11 @@
 //! keeps the finished shards and networks, computes the rest, and ends with a model file
 //! byte-identical to an uninterrupted bake with the same seed: every shard and network is a
 //! pure function of its key, and the model records no timings.
+//!
+//! The same property splits a bake across machines ([`Part`]): each stage (sampling, aimed
+//! sampling, training) runs as disjoint shards that write only their own cache files into a
+//! shared folder, and a merge reads them all and writes the model, the same bytes as a bake
+//! on one machine.
 
 mod cache;
 pub mod lm;
@@ -159,6 +164,11 @@ pub enum BakeError {
     #[error("{}: the bake would train no network: {cause}", scene.display())]
     NoNetworks { scene: PathBuf, cause: String },
     #[error(
+        "{}: missing; run `rrf bake --stage {stage} --shard I/N` for every I first, with the same scene, seed and quality",
+        path.display()
+    )]
+    MissingStage { path: PathBuf, stage: &'static str },
+    #[error(
         "{}: {configurations} configurations × {rays} rays could make {:.1} GiB of samples, more than the {} GiB a bake may hold; lower them in the sidecar's [bake] section",
         scene.display(), *bytes as f64 / GIB, MAX_SAMPLE_BYTES / (1 << 30)
     )]
@@ -171,16 +181,18 @@ const GIB: f64 = (1u64 << 30) as f64;
 /// mistake rather than a bake.
 pub const MAX_SAMPLE_BYTES: u64 = 16 << 30;
 
-#[derive(Clone, Debug, Serialize)]
+/// What a bake (or a part of one) did; a stage's shard fills what it got to.
+#[derive(Clone, Debug, Default, Serialize)]
 pub struct BakeReport {
     pub samples: usize,
     pub paths: u64,
     pub sample_seconds: f64,
     pub train_seconds: f64,
-    /// Shards found finished on disk from an earlier, interrupted bake.
+    /// Shards found finished on disk from an earlier, interrupted bake (or earlier stages).
     pub resumed_shards: usize,
     pub shards: usize,
-    /// Networks found trained on disk from an earlier, interrupted bake.
+    /// Networks trained or read back; of them, found trained on disk.
+    pub networks: usize,
     pub resumed_networks: usize,
     /// Cache files with the right key whose contents did not match their checksum: recomputed.
     pub corrupt_files: usize,
@@ -188,6 +200,21 @@ pub struct BakeReport {
     pub non_finite_dropped: u64,
     /// Objects that rays over the sphere rarely hit, which got rays aimed at them.
     pub aimed_objects: Vec<String>,
+}
+
+impl BakeReport {
+    /// Counts the shard files of a pass this part computed or resumed (not those it only read).
+    fn add_shards(&mut self, pass: &Sampled) {
+        self.shards += pass.shards;
+        self.resumed_shards += pass.resumed;
+    }
+
+    /// Records the sampling's time and dropped contributions, and the sample count so far.
+    fn finish_sampling(&mut self, start: Instant, dropped_before: u64, corrupt: &AtomicUsize) {
+        self.sample_seconds = start.elapsed().as_secs_f64();
+        self.non_finite_dropped = non_finite_dropped() - dropped_before;
+        self.corrupt_files = corrupt.load(Ordering::SeqCst);
+    }
 }
 
 const SHARD_MAGIC: &[u8; 8] = b"RRFSHRD2";
@@ -200,13 +227,94 @@ struct Checkpoint {
     params: Vec<f32>,
 }
 
-/// Bakes `scene`, keeping sample shards in `cache` (created if needed).
+/// The stages of a bake, in order; each needs every file of the ones before.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Stage {
+    /// Rays over the sphere from every configuration's viewpoint.
+    Sample,
+    /// Rays aimed at the objects the first stage rarely hit.
+    Aim,
+    /// Two networks per object.
+    Train,
+}
+
+impl Stage {
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Sample => "sample",
+            Stage::Aim => "aim",
+            Stage::Train => "train",
+        }
+    }
+}
+
+/// How much of a bake one process runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// Everything, computing what the cache lacks, then the model.
+    Whole,
+    /// Shard `index` of `count` of one stage: every `count`-th shard file (or network) from
+    /// `index`, read from the cache if there; the earlier stages' files must all be there.
+    Stage { stage: Stage, index: u32, count: u32 },
+    /// Only the model, from a cache that every stage has filled.
+    Merge,
+}
+
+/// What a part does with one stage's files.
+#[derive(Clone, Copy)]
+enum Work {
+    /// Read what is there, compute the rest.
+    All,
+    /// Files `i` with `i % count == index`: read if there, else compute; leave the others.
+    Share { index: usize, count: usize },
+    /// Read every file; a missing one is an error.
+    Read,
+}
+
+impl Work {
+    fn mine(self, i: usize) -> bool {
+        match self {
+            Work::Share { index, count } => i % count == index,
+            Work::All | Work::Read => true,
+        }
+    }
+}
+
+impl Part {
+    /// What this part does in `stage`; `None` once its own stage is done.
+    fn work(self, stage: Stage) -> Option<Work> {
+        match self {
+            Part::Whole => Some(Work::All),
+            Part::Merge => Some(Work::Read),
+            Part::Stage { stage: own, index, count } => match stage.cmp(&own) {
+                std::cmp::Ordering::Less => Some(Work::Read),
+                std::cmp::Ordering::Equal => Some(Work::Share { index: index as usize, count: count as usize }),
+                std::cmp::Ordering::Greater => None,
+            },
+        }
+    }
+}
+
+/// Bakes `scene`, keeping sample shards and trained networks in `cache` (created if needed).
 pub fn bake(
     scene: &Scene,
     settings: &BakeSettings,
     cache: &Path,
     progress: &dyn BakeProgress,
 ) -> Result<(Model, BakeReport), BakeError> {
+    let (model, report) = bake_part(scene, settings, cache, progress, Part::Whole)?;
+    Ok((model.expect("a whole bake ends with a model"), report))
+}
+
+/// Runs `part` of a bake of `scene` on `cache`: the model for [`Part::Whole`] and
+/// [`Part::Merge`], `None` for a stage's shard, whose work is its cache files.
+pub fn bake_part(
+    scene: &Scene,
+    settings: &BakeSettings,
+    cache: &Path,
+    progress: &dyn BakeProgress,
+    part: Part,
+) -> Result<(Option<Model>, BakeReport), BakeError> {
     let (Some(light), Some(camera)) = (&scene.moving_light, &scene.camera_box) else {
         return Err(BakeError::NoDomains { scene: scene.gltf_path.clone(), sidecar: scene.sidecar_file() });
     };
@@ -248,11 +356,20 @@ pub fn bake(
         let d = done.fetch_add(n as u64, Ordering::SeqCst) + n as u64;
         progress.sampled(d, configs.len() as u64);
     };
-    let sphere = shards.run("shard", &[], &sampled, |i| {
+    let mut report = BakeReport::default();
+    let sample_work = part.work(Stage::Sample).expect("every part reads the first stage");
+    let sphere = shards.run("shard", &[], Stage::Sample, sample_work, &sampled, |i| {
         let seed = mix64(settings.seed ^ mix64(i as u64 + 1));
         let (rays, paths) = (settings.rays_per_configuration, settings.paths_per_sample);
         sample_configuration(scene, &geometry, &configs[i], Aim::Sphere, rays, paths, &settings.trace(), seed)
     })?;
+    if !matches!(sample_work, Work::Read) {
+        report.add_shards(&sphere);
+    }
+    let Some(aim_work) = part.work(Stage::Aim) else {
+        report.finish_sampling(start, dropped_before, &corrupt);
+        return Ok((None, report));
+    };
     let mut counts = vec![0usize; scene.objects.len()];
     sphere.samples.iter().for_each(|s| counts[s.object as usize] += 1);
     let aimed: Vec<SurfacePoints> = scene
@@ -265,7 +382,7 @@ pub fn bake(
     let aimed_key: Vec<u8> = aimed.iter().flat_map(|t| t.object().to_le_bytes()).collect();
     let extra = match aimed.is_empty() {
         true => Sampled::default(),
-        false => shards.run("aimed", &aimed_key, &|_| {}, |i| {
+        false => shards.run("aimed", &aimed_key, Stage::Aim, aim_work, &|_| {}, |i| {
             let seed = mix64(settings.seed ^ mix64(i as u64 + 1) ^ AIMED_STREAM);
             let (rays, paths) = (aimed_rays, settings.paths_per_sample);
             let sample = |t: &SurfacePoints| {
@@ -275,12 +392,17 @@ pub fn bake(
             aimed.iter().flat_map(sample).collect()
         })?,
     };
-    let resumed_shards = sphere.resumed + extra.resumed;
-    let shard_count = sphere.shards + extra.shards;
-    let aimed_objects: Vec<String> = aimed.iter().map(|t| scene.objects[t.object() as usize].name.clone()).collect();
+    if !matches!(aim_work, Work::Read) {
+        report.add_shards(&extra);
+    }
+    report.aimed_objects = aimed.iter().map(|t| scene.objects[t.object() as usize].name.clone()).collect();
+    report.finish_sampling(start, dropped_before, &corrupt);
+    let Some(train_work) = part.work(Stage::Train) else {
+        return Ok((None, report));
+    };
     let all: Vec<Sample> = sphere.samples.into_iter().chain(extra.samples).collect();
-    let sample_seconds = start.elapsed().as_secs_f64();
-    let non_finite_dropped = non_finite_dropped() - dropped_before;
+    report.samples = all.len();
+    report.paths = all.len() as u64 * u64::from(settings.paths_per_sample);
 
     // Training: two networks per object that has samples.
     let start = Instant::now();
@@ -332,7 +454,9 @@ pub fn bake(
     let trained = AtomicU64::new(0);
     let resumed_networks = AtomicUsize::new(0);
     let settings_key = serde_json::to_string(settings).expect("settings serialise");
-    let networks: Vec<(Network, NetworkInfo)> = jobs
+    let mine: Vec<(u32, Component)> =
+        jobs.iter().enumerate().filter(|(i, _)| train_work.mine(*i)).map(|(_, &job)| job).collect();
+    let networks: Vec<(Network, NetworkInfo)> = mine
         .par_iter()
         .map(|&(object, component)| {
             let mut key = Fnv64::default();
@@ -351,6 +475,9 @@ pub fn bake(
                     resumed_networks.fetch_add(1, Ordering::SeqCst);
                     resumed
                 }
+                None if matches!(train_work, Work::Read) => {
+                    return Err(BakeError::MissingStage { path, stage: Stage::Train.name() })
+                }
                 None => {
                     let (network, info) =
                         train_network(scene, settings, object, component, &by_object[object as usize]);
@@ -361,11 +488,17 @@ pub fn bake(
                 }
             };
             let d = trained.fetch_add(1, Ordering::SeqCst) + 1;
-            progress.trained(d, jobs.len() as u64);
+            progress.trained(d, mine.len() as u64);
             Ok((network, info))
         })
         .collect::<Result<_, BakeError>>()?;
-    let train_seconds = start.elapsed().as_secs_f64();
+    report.train_seconds = start.elapsed().as_secs_f64();
+    report.resumed_networks = resumed_networks.into_inner();
+    report.networks = networks.len();
+    report.corrupt_files = corrupt.into_inner();
+    if matches!(train_work, Work::Share { .. }) {
+        return Ok((None, report));
+    }
 
     let metadata = Metadata {
         format_version: FORMAT_VERSION,
@@ -380,20 +513,7 @@ pub fn bake(
         checksum: String::new(),
     };
     let model = Model { metadata, networks: networks.into_iter().map(|(n, _)| n).collect() };
-    let paths = all.len() as u64 * u64::from(settings.paths_per_sample);
-    let report = BakeReport {
-        samples: all.len(),
-        paths,
-        sample_seconds,
-        train_seconds,
-        resumed_shards,
-        shards: shard_count,
-        resumed_networks: resumed_networks.into_inner(),
-        corrupt_files: corrupt.into_inner(),
-        non_finite_dropped,
-        aimed_objects,
-    };
-    Ok((model, report))
+    Ok((Some(model), report))
 }
 
 /// Objects that got fewer samples than this many times `min_samples` from rays over the sphere
@@ -431,16 +551,21 @@ struct Shards<'a> {
 impl Shards<'_> {
     /// Runs `sample` on every configuration, in shards named `NAME-00000.bin` (`pass` tells
     /// passes of the same name apart in their key), reading finished shards back from the
-    /// cache; `done(n)` after every `n` configurations.
+    /// cache, as much of it as `work` says (`stage` names it in errors); `done(n)` after every
+    /// `n` configurations.
     fn run(
         &self,
         name: &str,
         pass: &[u8],
+        stage: Stage,
+        work: Work,
         done: &(dyn Fn(usize) + Sync),
         sample: impl Fn(usize) -> Vec<Sample> + Sync,
     ) -> Result<Sampled, BakeError> {
         let shard_count = self.count.div_ceil(self.shard_size);
         let shards: Vec<(Vec<Sample>, bool)> = (0..shard_count)
+            .filter(|&shard| work.mine(shard))
+            .collect::<Vec<_>>()
             .into_par_iter()
             .map(|shard| {
                 let range = shard * self.shard_size..((shard + 1) * self.shard_size).min(self.count);
@@ -455,6 +580,9 @@ impl Shards<'_> {
                     done(range.len());
                     return Ok((samples, true));
                 }
+                if let Work::Read = work {
+                    return Err(BakeError::MissingStage { path, stage: stage.name() });
+                }
                 let mut samples = Vec::new();
                 for i in range {
                     samples.extend(sample(i));
@@ -465,7 +593,8 @@ impl Shards<'_> {
             })
             .collect::<Result<_, BakeError>>()?;
         let resumed = shards.iter().filter(|(_, resumed)| *resumed).count();
-        Ok(Sampled { samples: shards.into_iter().flat_map(|(s, _)| s).collect(), resumed, shards: shard_count })
+        let count = shards.len();
+        Ok(Sampled { samples: shards.into_iter().flat_map(|(s, _)| s).collect(), resumed, shards: count })
     }
 }
 

@@ -1,0 +1,81 @@
+//! A bake split across processes, as a cluster's array jobs run it: three shards of each stage
+//! (sample, aim, train), then the merge, write a model byte-identical to a bake in one process
+//! with the same seed. A re-run shard writes the same bytes, and a stage started before the
+//! one it needs names the missing file and the stage to run.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use common::rrf;
+
+fn bake(output: &Path, extra: &[&str]) -> Output {
+    let output = output.to_str().unwrap();
+    let mut args = vec!["bake", "scenes/cornell-box", "--quality", "test", "--seed", "3", "-o", output];
+    args.extend(extra);
+    rrf(&args, &[])
+}
+
+fn scratch() -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rrf-bake-cluster-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn succeeds(run: Output) -> String {
+    let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+    assert!(run.status.success(), "{stderr}");
+    stderr
+}
+
+#[test]
+fn three_shards_per_stage_then_a_merge_make_the_same_model() {
+    let dir = scratch();
+    let whole = dir.join("whole.safetensors");
+    succeeds(bake(&whole, &[]));
+
+    let split = dir.join("split.safetensors");
+    let cache = dir.join("split.bake-cache");
+    let early = bake(&split, &["--stage", "train", "--shard", "0/3"]);
+    let stderr = String::from_utf8_lossy(&early.stderr);
+    assert_eq!(early.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("shard-00000.bin: missing") && stderr.contains("--stage sample"), "{stderr}");
+
+    for stage in ["sample", "aim", "train"] {
+        for i in 0..3 {
+            let stderr = succeeds(bake(&split, &["--stage", stage, "--shard", &format!("{i}/3")]));
+            assert!(stderr.contains(&format!("stage {stage} shard {i}/3")), "{stderr}");
+        }
+    }
+    // The scheduler retries a shard: the same file, byte for byte.
+    let shard = cache.join("shard-00001.bin");
+    let first = std::fs::read(&shard).unwrap();
+    std::fs::remove_file(&shard).unwrap();
+    succeeds(bake(&split, &["--stage", "sample", "--shard", "1/3"]));
+    assert_eq!(std::fs::read(&shard).unwrap(), first, "a re-run shard writes the same bytes");
+
+    succeeds(bake(&split, &["--merge"]));
+    assert!(std::fs::read(&whole).unwrap() == std::fs::read(&split).unwrap(), "merged model differs");
+    assert!(!cache.exists(), "the merge removes the bake cache, as a bake does");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+#[test]
+fn shard_arguments_are_checked() {
+    let dir = scratch().join("args");
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("m.safetensors");
+    for (extra, expected) in [
+        (&["--stage", "sample", "--shard", "3/3"][..], "expected I/N with 0 <= I < N"),
+        (&["--stage", "sample"][..], "--shard"),
+        (&["--shard", "0/2"][..], "--stage"),
+        (&["--merge", "--stage", "aim", "--shard", "0/2"][..], "cannot be used with"),
+    ] {
+        let run = bake(&model, extra);
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{extra:?}: {stderr}");
+        assert!(stderr.contains(expected), "{extra:?}: {stderr}");
+    }
+}
