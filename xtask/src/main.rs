@@ -6,6 +6,7 @@
 //! Elsewhere it prints the packages to look for and goes on.
 
 mod scenes;
+mod slurm;
 
 use std::path::Path;
 use std::process::{Command, ExitCode};
@@ -27,6 +28,9 @@ const RUN_PACKAGES: &[&str] = &[
 /// the viewer's window tests.
 const TEST_PACKAGES: &[&str] = &["vulkan-validationlayers", "g++", "xvfb", "xauth"];
 
+/// A one-node Slurm cluster for `slurm-bake`.
+const SLURM_PACKAGES: &[&str] = &["slurm-wlm", "munge"];
+
 /// The scene the main job runs on.
 const DEFAULT_SCENE: &str = "scenes/cornell-box";
 
@@ -40,6 +44,13 @@ tasks:
           Vulkan validation layer on
   setup   only install the system packages that the tests need
   scenes  regenerate the scenes under scenes/ from xtask/src/scenes/
+  slurm-bake
+          start a one-node Slurm cluster here (installs slurm-wlm and munge), bake the Cornell
+          box as array jobs with baker/cluster/slurm-bake.sh, and check the merged model is
+          byte-identical to a bake in one process (root; builds rrf first)
+  validate-k8s
+          check baker/cluster/k8s-bake.yaml against the Kubernetes schemas (installs the
+          kubernetes-validate tool from PyPI with pip)
   validate-gltf
           check the scenes' glTF with the Khronos glTF validator (installs it with npm into
           target/gltf-validator/; needs Node.js and npm)";
@@ -56,6 +67,10 @@ fn main() -> ExitCode {
         "setup" => install(&[RUN_PACKAGES, TEST_PACKAGES].concat()),
         "scenes" => scenes::generate(repo_root()),
         "validate-gltf" => validate_gltf(repo_root()),
+        "validate-k8s" => validate_k8s(repo_root()),
+        "slurm-bake" => install(SLURM_PACKAGES)
+            .and_then(|()| cargo(&["build", "--release", "--bin", "rrf"]))
+            .and_then(|()| slurm::run(repo_root())),
         "-h" | "--help" | "help" => {
             println!("{USAGE}");
             Ok(())
@@ -112,6 +127,37 @@ fn validate_gltf(root: &Path) -> Result<(), String> {
     } else {
         Err("the glTF validator found errors (above)".into())
     }
+}
+
+/// The Kubernetes manifest validator, pinned, and the Kubernetes version it checks against.
+const K8S_VALIDATOR: &str = "kubernetes-validate==1.37.0";
+
+/// Validates the Kubernetes manifest of a bake on a cluster, strictly (unknown keys refused).
+fn validate_k8s(root: &Path) -> Result<(), String> {
+    // Run as a module, so that no console script needs to be on PATH (pyenv shims).
+    let validator = || {
+        let mut cmd = Command::new("python3");
+        cmd.args(["-m", "kubernetes_validate"]);
+        cmd
+    };
+    let have = validator().arg("--version").output().is_ok_and(|o| o.status.success());
+    if !have {
+        eprintln!("xtask: pip install {K8S_VALIDATOR}");
+        let status = Command::new("python3")
+            .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check", K8S_VALIDATOR])
+            .status()
+            .map_err(|e| format!("cannot run python3 -m pip ({e}); install Python 3 and pip"))?;
+        if !status.success() {
+            return Err(format!("pip install {K8S_VALIDATOR} failed: {status}"));
+        }
+    }
+    let manifest = root.join("baker/cluster/k8s-bake.yaml");
+    let status = validator()
+        .arg("--strict")
+        .arg(&manifest)
+        .status()
+        .map_err(|e| format!("cannot run kubernetes-validate: {e}"))?;
+    status.success().then_some(()).ok_or_else(|| format!("{} does not validate (above)", manifest.display()))
 }
 
 /// Installs the Debian packages of `packages` that are not installed yet.
