@@ -869,3 +869,17 @@ fn tangents_are_derived_from_uvs_or_read() {
     // Read as written (the node has no transform).
     assert_eq!(scene.objects[0].tangents, vec![rrf_baker::glam::Vec4::new(0.0, 1.0, 0.0, -1.0); 3]);
 }
+
+#[test]
+fn unusable_texture_transforms_are_refused() {
+    let material = json!({
+        "pbrMetallicRoughness": {
+            "baseColorTexture": { "index": 0, "extensions": { "KHR_texture_transform": { "scale": [1e30, 1.0] } } }
+        },
+    });
+    let err = load_err(&textured_triangle("huge-transform", material, None));
+    assert!(err.contains("materials[0]") && err.contains("KHR_texture_transform"), "{err}");
+    let material = json!({ "pbrMetallicRoughness": { "baseColorFactor": [1.0, 1.0, 1.0, 2.0] } });
+    let err = load_err(&textured_triangle("alpha-factor", material, None));
+    assert!(err.contains("baseColorFactor"), "{err}");
+}

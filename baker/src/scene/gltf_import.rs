@@ -409,7 +409,7 @@ impl Importer<'_> {
         let [r, g, b, alpha] = pbr.base_color_factor();
         // Each factor's values, and the largest glTF allows (the least is 0).
         let factors: [(&str, Vec<f32>, f32); 6] = [
-            ("baseColorFactor", vec![r, g, b], 1.0),
+            ("baseColorFactor", vec![r, g, b, alpha], 1.0),
             ("metallicFactor", vec![pbr.metallic_factor()], 1.0),
             ("roughnessFactor", vec![pbr.roughness_factor()], 1.0),
             ("emissiveFactor", m.emissive_factor().to_vec(), 1.0),
@@ -444,6 +444,24 @@ impl Importer<'_> {
             }
             None => None,
         };
+        // Offsets, scales and rotations beyond this would only make UVs that f32 cannot tell
+        // apart, or non-finite ones.
+        const MAX_TRANSFORM: f32 = 1e6;
+        let textures = [base_color_texture, metallic_roughness_texture, normal_texture.map(|n| n.0), emissive_texture];
+        let unusable = |t: &TextureRef| {
+            let t = t.transform;
+            !t.matrix.iter().chain(&t.offset.to_array()).all(|v| v.is_finite() && v.abs() <= MAX_TRANSFORM)
+        };
+        if textures.iter().flatten().any(unusable) {
+            return Err(SceneError::new(
+                self.file,
+                &element,
+                format!("a KHR_texture_transform value is not finite or beyond ±{MAX_TRANSFORM:e}"),
+            ));
+        }
+        if let Some(scale) = m.normal_texture().map(|t| t.scale()).filter(|s| !s.is_finite()) {
+            return Err(SceneError::new(self.file, &element, format!("normalTexture scale {scale} is not finite")));
+        }
         let alpha_mode = match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
             gltf::material::AlphaMode::Mask => AlphaMode::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5) },
