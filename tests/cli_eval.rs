@@ -24,8 +24,8 @@ fn eval_reports_metrics_figures_and_caches_references() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 
     let cache = dir.join("cache");
-    let eval = |model: &Path, report_dir: &Path| {
-        let args = [
+    let eval = |model: &Path, report_dir: &Path, extra: &[&str]| {
+        let mut args = vec![
             "eval",
             "scenes/cornell-box",
             "--model",
@@ -41,6 +41,7 @@ fn eval_reports_metrics_figures_and_caches_references() {
             "-o",
             report_dir.to_str().unwrap(),
         ];
+        args.extend(extra);
         let out = rrf(&args, &[("RRF_VALIDATION", "required")]);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let text = std::fs::read_to_string(report_dir.join("metrics.json")).unwrap();
@@ -48,7 +49,7 @@ fn eval_reports_metrics_figures_and_caches_references() {
     };
 
     let report_dir = dir.join("eval");
-    let first = eval(&model, &report_dir);
+    let first = eval(&model, &report_dir, &[]);
     assert_eq!(first["scene"], "cornell-box");
     let configs = first["configs"].as_array().unwrap();
     // One per named view (default, corner, front) and one from the hypercube.
@@ -70,18 +71,26 @@ fn eval_reports_metrics_figures_and_caches_references() {
     }
     finite(&first["mean"]);
 
-    let second = eval(&model, &report_dir);
+    let second = eval(&model, &report_dir, &[]);
     for c in second["configs"].as_array().unwrap() {
         assert_eq!(c["reference_cached"], true, "the second eval reads the cached references");
     }
     assert_eq!(first["mean"], second["mean"], "the same references and predictions give the same numbers");
+
+    // --floor-below raises the references' spp until two of them agree that well.
+    let floor_at_8 = first["configs"][0]["floor"]["flip"].as_f64().unwrap();
+    let limit = format!("{:.4}", 0.7 * floor_at_8);
+    let raised = eval(&model, &dir.join("eval-floor"), &["--floor-below", &limit]);
+    let c = &raised["configs"][0];
+    assert!(c["spp"].as_u64().unwrap() > 8, "{c}");
+    assert!(c["floor"]["flip"].as_f64().unwrap() < floor_at_8, "{c}");
 
     // The margin has teeth: a model with every weight zero (black but for the emitters) misses it.
     let mut zero = Model::load(&model, None).unwrap();
     zero.networks.iter_mut().for_each(|n| n.params.fill(0.0));
     let zero_path = dir.join("zero.safetensors");
     zero.save(&zero_path).unwrap();
-    let report = eval(&zero_path, &dir.join("eval-zero"));
+    let report = eval(&zero_path, &dir.join("eval-zero"), &[]);
     let configs = report["configs"].as_array().unwrap();
     assert!(!configs.iter().any(beats_trivial_predictions), "a zero model must fail: {report}");
     std::fs::remove_dir_all(&dir).unwrap();

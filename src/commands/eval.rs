@@ -43,6 +43,12 @@ pub struct EvalArgs {
     /// 1 to 1,048,576.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub spp: u32,
+    /// Raise a configuration's reference spp until the floor (the FLIP of a second reference
+    /// against the first) is below this, so that a FLIP target can be read: FLIP noise falls
+    /// about as 1/sqrt(spp), so each try renders both references at the spp that rule predicts
+    /// (up to three tries, at most 1,048,576 spp). Try a third of the FLIP you want to judge.
+    #[arg(long, value_name = "FLIP", value_parser = parse_floor)]
+    pub floor_below: Option<f64>,
     /// Image size in pixels, each side 1 to 16384.
     #[arg(long, default_value = "256x256", value_name = "WxH")]
     pub size: String,
@@ -121,19 +127,36 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         .iter()
         .enumerate()
         .map(|(i, config)| {
-            let progress =
-                Progress::new(u64::from(width * height), &format!("reference {}/{}", i + 1, configs.len()), false);
-            let (truth, cached) = reference(&scene, &geometry, config, &settings, &cache, &|n| progress.inc(n))?;
-            progress.finish();
-            // The floor: a second reference with independent paths, scored against the first.
-            let progress = Progress::new(
-                u64::from(width * height),
-                &format!("second reference {}/{}", i + 1, configs.len()),
-                false,
-            );
-            let second = RenderSettings { seed: mix64(args.seed ^ FLOOR_STREAM), ..settings };
-            let (twin, _) = reference(&scene, &geometry, config, &second, &cache, &|n| progress.inc(n))?;
-            progress.finish();
+            let mut settings = settings;
+            let mut tries = 0;
+            let (truth, twin, cached) = loop {
+                let progress = Progress::new(
+                    u64::from(width * height),
+                    &format!("reference {}/{} ({} spp)", i + 1, configs.len(), settings.spp),
+                    false,
+                );
+                let (truth, cached) = reference(&scene, &geometry, config, &settings, &cache, &|n| progress.inc(n))?;
+                progress.finish();
+                // The floor: a second reference with independent paths, scored against the first.
+                let progress = Progress::new(
+                    u64::from(width * height),
+                    &format!("second reference {}/{} ({} spp)", i + 1, configs.len(), settings.spp),
+                    false,
+                );
+                let second = RenderSettings { seed: mix64(args.seed ^ FLOOR_STREAM), ..settings };
+                let (twin, _) = reference(&scene, &geometry, config, &second, &cache, &|n| progress.inc(n))?;
+                progress.finish();
+                let Some(limit) = args.floor_below else { break (truth, twin, cached) };
+                let floor = floor_flip(&truth.pixels, &twin.pixels, width, height);
+                if floor < limit || tries == MAX_FLOOR_TRIES || settings.spp == MAX_SPP {
+                    if floor >= limit {
+                        eprintln!("warning: {}: floor {floor:.4} still above {limit} at {} spp", config.name, settings.spp);
+                    }
+                    break (truth, twin, cached);
+                }
+                tries += 1;
+                settings.spp = spp_for_floor(settings.spp, floor, limit);
+            };
             let predicted = predict(&predictor, &scene, &geometry, &model, config, width, height)?;
             let figure = format!("{:02}-{}.png", i, config.name);
             let Scores { metrics, baselines, floor } = evaluate(
@@ -141,16 +164,17 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                 &truth.pixels,
                 &twin.pixels,
                 (width, height),
-                args.spp,
+                settings.spp,
                 &args.output.join(&figure),
             )?;
             eprintln!(
-                "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4} (floor {:.4}; black {:.4}, mean colour {:.4}){}",
+                "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4} (floor {:.4} at {} spp; black {:.4}, mean colour {:.4}){}",
                 config.name,
                 metrics.gi.relmse,
                 metrics.gi.psnr,
                 metrics.gi.flip,
                 floor.flip,
+                settings.spp,
                 baselines.black.flip,
                 baselines.mean_colour.flip,
                 if cached { " (cached reference)" } else { "" }
@@ -161,6 +185,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                 camera: CameraReport { eye: v.eye.to_array(), target: v.target.to_array(), fov_y: v.fov_y },
                 light: config.light.to_array(),
                 figure,
+                spp: settings.spp,
                 reference_cached: cached,
                 metrics,
                 baselines,
@@ -211,6 +236,31 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     );
     eprintln!("wrote {}", args.output.join("index.html").display());
     Ok(())
+}
+
+/// The most tries of `--floor-below` after the first references, and the most spp.
+const MAX_FLOOR_TRIES: u32 = 3;
+const MAX_SPP: u32 = 1 << 20;
+
+fn parse_floor(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v > 0.0 && v < 1.0 => Ok(v),
+        _ => Err(format!("{text:?}: a FLIP value between 0 and 1 (exclusive), e.g. 0.017")),
+    }
+}
+
+/// The FLIP of the global image of `twin` against `truth`.
+fn floor_flip(truth: &[rrf_baker::trace::Radiance], twin: &[rrf_baker::trace::Radiance], w: u32, h: u32) -> f64 {
+    let gi = |r: &[rrf_baker::trace::Radiance]| r.iter().map(|r| r.gi()).collect::<Vec<Vec3>>();
+    compare(&gi(twin), &gi(truth), w, h).metrics.flip
+}
+
+/// The spp at which a floor of `floor` at `spp` falls to `limit`, if FLIP noise falls as
+/// 1/sqrt(spp), with a tenth to spare, in whole multiples of 64.
+fn spp_for_floor(spp: u32, floor: f64, limit: f64) -> u32 {
+    let wanted = f64::from(spp) * (floor / limit).powi(2) * 1.1;
+    let rounded = (wanted / 64.0).ceil() * 64.0;
+    (rounded.min(f64::from(MAX_SPP)) as u32).max((spp + 1).min(MAX_SPP))
 }
 
 /// Per-pixel predicted radiance of one configuration: direct, indirect, global.
@@ -292,4 +342,17 @@ fn evaluate(
         baselines: Baselines::of(&true_gi, width, height),
         floor: compare(&twin_gi, &true_gi, width, height).metrics,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spp_for_a_floor_follows_the_square_root_rule() {
+        // 0.038 at 256 spp down to 0.0167: (0.038 / 0.0167)² × 1.1 × 256 = 1458, up to 1472.
+        assert_eq!(spp_for_floor(256, 0.038, 0.0167), 1472);
+        assert_eq!(spp_for_floor(1 << 20, 0.5, 0.01), MAX_SPP);
+        assert!(spp_for_floor(64, 0.0101, 0.01) > 64, "always more than before");
+    }
 }

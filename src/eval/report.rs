@@ -43,6 +43,8 @@ pub struct ConfigReport {
     pub light: [f32; 3],
     /// The figure's file name in DIR.
     pub figure: String,
+    /// Samples per pixel of its references (above the run's with `--floor-below`).
+    pub spp: u32,
     pub reference_cached: bool,
     pub metrics: ComponentMetrics,
     /// The global image's metrics for trivial predictions of the same reference.
@@ -60,6 +62,7 @@ pub struct Report {
     pub predictions: String,
     pub width: u32,
     pub height: u32,
+    /// Samples per pixel of the references (where `--floor-below` raised none).
     pub spp: u32,
     pub max_depth: u32,
     pub rr_depth: u32,
