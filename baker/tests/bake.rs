@@ -153,7 +153,7 @@ fn model_round_trips_and_refuses_bad_files() {
     let message = error(&write("flipped.safetensors", &flipped), None);
     assert!(message.contains("checksum"), "{message}");
 
-    let needle = b"format_version\\\":2";
+    let needle = format!("format_version\\\":{}", rrf_baker::model::FORMAT_VERSION).into_bytes();
     let at = bytes.windows(needle.len()).position(|w| w == needle).expect("the metadata holds the version");
     let mut versioned = bytes.clone();
     versioned[at + needle.len() - 1] = b'7';
