@@ -221,6 +221,8 @@ pub struct GBufferMesh {
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Draw {
     object: u32,
+    /// Some triangle's material uses a texture: drawn with the pipeline that samples them.
+    textured: bool,
     first_index: u32,
     index_count: u32,
     min: [f32; 3],
@@ -229,7 +231,8 @@ struct Draw {
 
 impl Draw {
     /// The runs of `indices` (whole triangles) that belong to one object each.
-    fn runs(vertices: &[GBufferVertex], indices: &[u32]) -> Vec<Draw> {
+    /// `textured(material)` says whether a material uses a texture.
+    fn runs(vertices: &[GBufferVertex], indices: &[u32], textured: impl Fn(u32) -> bool) -> Vec<Draw> {
         let mut draws: Vec<Draw> = Vec::new();
         for (t, triangle) in indices.chunks_exact(3).enumerate() {
             let object = vertices[triangle[0] as usize].object;
@@ -238,6 +241,7 @@ impl Draw {
                 _ => {
                     draws.push(Draw {
                         object,
+                        textured: false,
                         first_index: 3 * t as u32,
                         index_count: 0,
                         min: [f32::INFINITY; 3],
@@ -247,6 +251,7 @@ impl Draw {
                 }
             };
             draw.index_count += 3;
+            draw.textured |= textured(vertices[triangle[0] as usize].material);
             for &v in triangle {
                 let p = vertices[v as usize].position;
                 draw.min = std::array::from_fn(|axis| draw.min[axis].min(p[axis]));
@@ -299,6 +304,8 @@ impl GBufferMesh {
                 materials.len()
             )));
         }
+        let textured: Vec<bool> =
+            materials.iter().map(|m| m.textures.iter().any(|t| t.shape & TextureRef::PRESENT != 0)).collect();
         let max = u64::from(ctx.info.limits.max_storage_buffer_range);
         if texels.len() as u64 * 4 > max {
             return Err(Error::Invalid(format!(
@@ -341,7 +348,7 @@ impl GBufferMesh {
             index_offset,
             materials: materials.keep(),
             texels: texels.keep(),
-            draws: Draw::runs(vertices, indices),
+            draws: Draw::runs(vertices, indices, |m| textured.get(m as usize).copied().unwrap_or(false)),
         })
     }
 
@@ -359,7 +366,10 @@ impl Destroy for GBufferMesh {
 }
 
 pub struct GBufferPass {
-    pipeline: vk::Pipeline,
+    /// For draws without textures, and with (`gbuffer.frag`'s TEXTURED constant): lavapipe
+    /// runs the code of a branch no fragment takes, and the texture code made untextured
+    /// scenes' G-buffer ten times slower.
+    pipelines: [vk::Pipeline; 2],
     layout: vk::PipelineLayout,
     /// The materials and texels of the mesh the pass was made for.
     set: Option<BoundSet>,
@@ -374,8 +384,11 @@ impl GBufferPass {
             .stage_flags(vk::ShaderStageFlags::VERTEX)
             .size(std::mem::size_of::<GBufferConstants>() as u32)];
         // Destroyed by the guard if a step fails; null handles are skipped.
-        let mut pass =
-            ctx.guard(GBufferPass { pipeline: vk::Pipeline::null(), layout: vk::PipelineLayout::null(), set: None });
+        let mut pass = ctx.guard(GBufferPass {
+            pipelines: [vk::Pipeline::null(); 2],
+            layout: vk::PipelineLayout::null(),
+            set: None,
+        });
         let bindings = [Bind::StorageBuffer(&mesh.materials), Bind::StorageBuffer(&mesh.texels)];
         let set = pass.set.insert(BoundSet::new(ctx, "gbuffer", &bindings, vk::ShaderStageFlags::FRAGMENT)?);
         let set_layouts = [set.layout];
@@ -469,11 +482,27 @@ impl GBufferPass {
                 .dynamic_state(&dynamic)
                 .layout(layout)
                 .push_next(&mut rendering);
-            let pipeline = device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None);
+            let mut created = Ok(());
+            for (i, textured) in [false, true].into_iter().enumerate() {
+                let value = [u32::from(textured)];
+                let entries = [vk::SpecializationMapEntry { constant_id: 0, offset: 0, size: 4 }];
+                let specialization =
+                    vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(&value));
+                let mut stages = stages;
+                stages[1] = stages[1].specialization_info(&specialization);
+                let info = info.stages(&stages);
+                match device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) {
+                    Ok(p) => pass.pipelines[i] = p[0],
+                    Err((_, e)) => {
+                        created = Err(e);
+                        break;
+                    }
+                }
+                ctx.set_name(pass.pipelines[i], if textured { "gbuffer (textured)" } else { "gbuffer" });
+            }
             device.destroy_shader_module(vs, None);
             device.destroy_shader_module(fs, None);
-            pass.pipeline = pipeline.map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")?[0];
-            ctx.set_name(pass.pipeline, "gbuffer");
+            created.vk("vkCreateGraphicsPipelines")?;
             ctx.set_name(layout, "gbuffer");
         }
         Ok(pass.keep())
@@ -543,7 +572,7 @@ impl GBufferPass {
         // SAFETY: `cmd` is recording outside a render pass; all objects belong to this device.
         unsafe {
             device.cmd_begin_rendering(cmd, &info);
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
+
             device.cmd_set_viewport(cmd, 0, &[viewport]);
             device.cmd_set_scissor(cmd, 0, &[area]);
             device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::VERTEX, 0, bytemuck::bytes_of(camera));
@@ -553,7 +582,13 @@ impl GBufferPass {
             device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.buffer.raw], &[0]);
             device.cmd_bind_index_buffer(cmd, mesh.buffer.raw, mesh.index_offset, vk::IndexType::UINT32);
             // Objects whose bounds are outside the view cost no vertex work or triangle set-up.
+            let mut bound = None;
             for draw in mesh.draws.iter().filter(|d| d.visible(camera)) {
+                if bound != Some(draw.textured) {
+                    let pipeline = self.pipelines[usize::from(draw.textured)];
+                    device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+                    bound = Some(draw.textured);
+                }
                 device.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0);
             }
             device.cmd_end_rendering(cmd);
@@ -569,7 +604,9 @@ impl Destroy for GBufferPass {
     fn destroy(self, ctx: &Context) {
         // SAFETY: no GPU work that uses the pipeline is pending; null handles are ignored.
         unsafe {
-            ctx.device.destroy_pipeline(self.pipeline, None);
+            for pipeline in self.pipelines {
+                ctx.device.destroy_pipeline(pipeline, None);
+            }
             ctx.device.destroy_pipeline_layout(self.layout, None);
         }
         self.set.destroy(ctx);
@@ -603,7 +640,7 @@ mod tests {
             vertex([5.1, 5.0, 0.5], 1),
             vertex([5.0, 5.1, 0.5], 1),
         ];
-        let draws = Draw::runs(&vertices, &[0, 1, 2, 3, 4, 5, 2, 1, 0]);
+        let draws = Draw::runs(&vertices, &[0, 1, 2, 3, 4, 5, 2, 1, 0], |_| false);
         assert_eq!(draws.len(), 3, "object 0, object 1, object 0 again");
         assert_eq!((draws[1].first_index, draws[1].index_count), (3, 3));
         assert_eq!(draws[1].min, [5.0, 5.0, 0.5]);
@@ -613,10 +650,10 @@ mod tests {
         let moved = identity(2, [-5.0, -5.0, 0.0, 0.0]);
         assert!(draws[1].visible(&moved));
         // Behind the near plane.
-        let behind = Draw::runs(&[vertex([0.0, 0.0, -1.0], 0); 3], &[0, 1, 2]);
+        let behind = Draw::runs(&[vertex([0.0, 0.0, -1.0], 0); 3], &[0, 1, 2], |_| false);
         assert!(!behind[0].visible(&view));
         // A box around the whole view is visible though no corner is inside.
         let around = [vertex([-9.0, -9.0, -9.0], 0), vertex([9.0, 9.0, 9.0], 0), vertex([9.0, -9.0, 0.5], 0)];
-        assert!(Draw::runs(&around, &[0, 1, 2])[0].visible(&view));
+        assert!(Draw::runs(&around, &[0, 1, 2], |_| false)[0].visible(&view));
     }
 }
