@@ -28,19 +28,20 @@ void main() {
     }
     uint id = imageLoad(gbuffer_id, pixel).r;
     uint object = id_object(id);
-    vec3 emission = object > 0u ? surface_emission(pixel, id) : vec3(0.0);
+    Shading shading = pixel_shading(pixel);
+    vec3 emission = object > 0u ? surface_emission(id, shading) : vec3(0.0);
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
     if (object > 0u) {
         uint base = (object - 1u) * OBJECT_STRIDE;
         uint ranges = base + 2 * PARAMETERS;
         if (weights[ranges + 2 * INPUTS + 2] > 0.5) {
-            float raw[INPUTS] = raw_inputs(pixel, id, constants.eye.xyz, constants.light.xyz);
+            float raw[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz, constants.light.xyz);
             float x[INPUTS];
             for (int i = 0; i < INPUTS; ++i) {
                 x[i] = normalize_input(raw[i], weights[ranges + i], weights[ranges + INPUTS + i]);
             }
-            vec3 reflectance = surface_reflectance(pixel, id);
+            vec3 reflectance = surface_reflectance(id, shading);
             direct = forward(base, x) * weights[ranges + 2 * INPUTS] * reflectance;
             indirect = forward(base + PARAMETERS, x) * weights[ranges + 2 * INPUTS + 1] * reflectance;
         }

@@ -16,15 +16,20 @@ layout(binding = 1, r32ui) uniform readonly uimage2D gbuffer_id;
 layout(std430, binding = 2) readonly buffer Materials { vec4 materials[]; };
 layout(binding = 3, rgba32ui) uniform readonly uimage2D gbuffer_shading;
 
-// What the pixel's surface emits towards the viewer.
-vec3 surface_emission(ivec2 pixel, uint id) {
-    return materials[id_material(id)].rgb * decode_shading(imageLoad(gbuffer_shading, pixel)).emissive_texture;
+// The material's textured values at `pixel`: read once per pixel and passed to the functions
+// below (lavapipe gathers every image read lane by lane).
+Shading pixel_shading(ivec2 pixel) {
+    return decode_shading(imageLoad(gbuffer_shading, pixel));
+}
+
+// What the surface of G-buffer id `id` and shading `s` emits towards the viewer.
+vec3 surface_emission(uint id, Shading s) {
+    return materials[id_material(id)].rgb * s.emissive_texture;
 }
 
 // What the networks' outputs are multiplied by: the surface's reflectance, the twin of
 // `reflectance` in baker/src/network.rs.
-vec3 surface_reflectance(ivec2 pixel, uint id) {
-    Shading s = decode_shading(imageLoad(gbuffer_shading, pixel));
+vec3 surface_reflectance(uint id, Shading s) {
     float specular = materials[id_material(id)].w;
     vec3 diffuse = s.base_color * (1.0 - s.metallic);
     vec3 f0 = mix(vec3(0.04 * specular), s.base_color, s.metallic);
@@ -44,13 +49,13 @@ float network_tanh(float x) {
 }
 
 // Position, direction towards the eye, light position, shading normal, roughness, of the
-// surface at `pixel` with G-buffer id `id`.
-float[INPUTS] raw_inputs(ivec2 pixel, uint id, vec3 eye, vec3 light) {
+// surface at `pixel` with shading `s`.
+float[INPUTS] raw_inputs(ivec2 pixel, Shading s, vec3 eye, vec3 light) {
     uvec4 surface = imageLoad(gbuffer_surface, pixel);
     vec3 p = uintBitsToFloat(surface.xyz);
     vec3 n = decode_normal(surface.w);
     vec3 v = normalize(eye - p);
-    float roughness = decode_shading(imageLoad(gbuffer_shading, pixel)).roughness;
+    float roughness = s.roughness;
     return float[INPUTS](p.x, p.y, p.z, v.x, v.y, v.z, light.x, light.y, light.z, n.x, n.y, n.z, roughness);
 }
 

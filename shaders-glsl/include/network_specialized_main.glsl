@@ -56,19 +56,20 @@ void main() {
     if (id_object(id) != OBJECT) {
         return;
     }
-    float x[INPUTS] = raw_inputs(pixel, id, constants.eye.xyz, constants.light.xyz);
-    vec3 reflectance = surface_reflectance(pixel, id);
+    Shading shading = pixel_shading(pixel);
+    float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz, constants.light.xyz);
+    vec3 reflectance = surface_reflectance(id, shading);
     vec3 direct = direct_network(x) * reflectance;
     vec3 indirect = indirect_network(x) * reflectance;
 #ifdef DISPLAY
     vec3 shown = constants.shown == 1u ? direct
                : constants.shown == 2u ? indirect
-               : surface_emission(pixel, id) + direct + indirect;
+               : surface_emission(id, shading) + direct + indirect;
     imageStore(display, pixel, vec4(tonemap(shown, constants.exposure_scale), 1.0));
 #else
     imageStore(out_direct, pixel, vec4(direct, 1.0));
     imageStore(out_indirect, pixel, vec4(indirect, 1.0));
-    imageStore(out_gi, pixel, vec4(surface_emission(pixel, id) + direct + indirect, 1.0));
+    imageStore(out_gi, pixel, vec4(surface_emission(id, shading) + direct + indirect, 1.0));
 #endif
 }
 
