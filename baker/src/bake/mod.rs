@@ -338,15 +338,10 @@ pub fn bake_part(
     let dropped_before = non_finite_dropped();
     let corrupt = AtomicUsize::new(0);
     let settings_json = serde_json::to_string(&SamplingKey::from(settings)).expect("settings serialise");
-    // The format version says what the samples' targets are (radiance over reflectance now).
-    let mut key = Fnv64::default();
-    key.write(&FORMAT_VERSION.to_le_bytes());
-    key.write(&scene.content_hash.to_le_bytes());
-    key.write(settings_json.as_bytes());
     let shards = Shards {
         cache,
         objects: scene.objects.len(),
-        key: key.0,
+        key: cache_key(scene, &settings_json).0,
         shard_size: settings.shard_configurations.max(1) as usize,
         count: configs.len(),
         corrupt: &corrupt,
@@ -459,10 +454,7 @@ pub fn bake_part(
     let networks: Vec<(Network, NetworkInfo)> = mine
         .par_iter()
         .map(|&(object, component)| {
-            let mut key = Fnv64::default();
-            key.write(&FORMAT_VERSION.to_le_bytes());
-            key.write(&scene.content_hash.to_le_bytes());
-            key.write(settings_key.as_bytes());
+            let mut key = cache_key(scene, &settings_key);
             key.write(&[component as u8]);
             key.write(&object.to_le_bytes());
             let path = cache.join(format!("network-{object:05}-{}.bin", component.name()));
@@ -514,6 +506,17 @@ pub fn bake_part(
     };
     let model = Model { metadata, networks: networks.into_iter().map(|(n, _)| n).collect() };
     Ok((Some(model), report))
+}
+
+/// The start of every cache file's key: the model format (it says what the samples' targets
+/// are: radiance over reflectance now), the scene's content hash, and `settings` (JSON of the
+/// settings that shape the file).
+fn cache_key(scene: &Scene, settings: &str) -> Fnv64 {
+    let mut key = Fnv64::default();
+    key.write(&FORMAT_VERSION.to_le_bytes());
+    key.write(&scene.content_hash.to_le_bytes());
+    key.write(settings.as_bytes());
+    key
 }
 
 /// Objects that got fewer samples than this many times `min_samples` from rays over the sphere

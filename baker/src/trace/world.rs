@@ -16,8 +16,9 @@ struct Emitter {
     corners: [Vec3; 3],
     uvs: [Vec2; 3],
     normal: Vec3,
-    /// The material's emission, times its emissive texture at the sampled point.
+    /// The material's emission, before `texture`.
     emission: Vec3,
+    /// The emissive texture, looked up at each sampled point.
     texture: Option<TextureRef>,
     double_sided: bool,
     area: f32,
