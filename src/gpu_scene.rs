@@ -92,12 +92,7 @@ pub fn surface_materials(scene: &Scene) -> (Vec<SurfaceMaterial>, Vec<u32>) {
                     AlphaMode::Mask { cutoff } => cutoff,
                 },
             ],
-            textures: [
-                texture(m.base_color_texture),
-                texture(m.metallic_roughness_texture),
-                texture(m.normal_texture.map(|n| n.0)),
-                texture(m.emissive_texture),
-            ],
+            textures: m.textures().map(texture),
             emits_back: u32::from(m.double_sided),
             pad: [0; 3],
         })

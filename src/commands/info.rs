@@ -5,7 +5,7 @@ use std::path::Path;
 
 use anyhow::Result;
 use rrf_baker::glam::Vec3;
-use rrf_baker::scene::{AlphaMode, LightKind, Material, Scene, TextureRef, UvTransform};
+use rrf_baker::scene::{AlphaMode, LightKind, Material, Scene, UvTransform};
 use rrf_renderer::{Context, ContextOptions};
 use serde_json::json;
 
@@ -37,21 +37,15 @@ fn device_info(json: bool) -> Result<()> {
 /// What a material uses beyond its constant factors: textures (with a transform), alpha mask,
 /// double sides, emission: what to check after an export.
 fn material_features(m: &Material) -> Vec<String> {
-    let texture = |name: &str, t: Option<TextureRef>| {
-        t.map(|t| {
-            let transformed = if t.transform == UvTransform::IDENTITY { "" } else { " (transformed)" };
-            format!("{name} texture{transformed}")
+    let names = ["base colour", "metallic-roughness", "normal", "emissive"];
+    let mut features: Vec<String> = names
+        .into_iter()
+        .zip(m.textures())
+        .filter_map(|(name, t)| {
+            let transformed = if t?.transform == UvTransform::IDENTITY { "" } else { " (transformed)" };
+            Some(format!("{name} texture{transformed}"))
         })
-    };
-    let mut features: Vec<String> = [
-        texture("base colour", m.base_color_texture),
-        texture("metallic-roughness", m.metallic_roughness_texture),
-        texture("normal", m.normal_texture.map(|n| n.0)),
-        texture("emissive", m.emissive_texture),
-    ]
-    .into_iter()
-    .flatten()
-    .collect();
+        .collect();
     if let AlphaMode::Mask { cutoff } = m.alpha_mode {
         features.push(format!("alpha mask (cutoff {cutoff})"));
     }

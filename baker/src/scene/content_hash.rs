@@ -63,8 +63,7 @@ pub(super) fn content_hash(scene: &Scene) -> u64 {
         // Texture transforms, normal maps, emissive textures and alpha masks came later: they
         // are written only where a material uses them, so that older scenes keep their hash
         // and their models.
-        let textures =
-            [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture.map(|n| n.0), m.emissive_texture];
+        let textures = m.textures();
         let transformed = textures.iter().flatten().any(|t| t.transform != UvTransform::IDENTITY);
         let cutoff = match m.alpha_mode {
             AlphaMode::Opaque => None,

@@ -444,24 +444,6 @@ impl Importer<'_> {
             }
             None => None,
         };
-        // Offsets, scales and rotations beyond this would only make UVs that f32 cannot tell
-        // apart, or non-finite ones.
-        const MAX_TRANSFORM: f32 = 1e6;
-        let textures = [base_color_texture, metallic_roughness_texture, normal_texture.map(|n| n.0), emissive_texture];
-        let unusable = |t: &TextureRef| {
-            let t = t.transform;
-            !t.matrix.iter().chain(&t.offset.to_array()).all(|v| v.is_finite() && v.abs() <= MAX_TRANSFORM)
-        };
-        if textures.iter().flatten().any(unusable) {
-            return Err(SceneError::new(
-                self.file,
-                &element,
-                format!("a KHR_texture_transform value is not finite or beyond ±{MAX_TRANSFORM:e}"),
-            ));
-        }
-        if let Some(scale) = m.normal_texture().map(|t| t.scale()).filter(|s| !s.is_finite()) {
-            return Err(SceneError::new(self.file, &element, format!("normalTexture scale {scale} is not finite")));
-        }
         let alpha_mode = match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
             gltf::material::AlphaMode::Mask => AlphaMode::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5) },
@@ -472,7 +454,7 @@ impl Importer<'_> {
                 AlphaMode::Opaque
             }
         };
-        Ok(Material {
+        let material = Material {
             base_color: Vec3::new(r, g, b),
             alpha,
             base_color_texture,
@@ -486,7 +468,25 @@ impl Importer<'_> {
             double_sided: m.double_sided(),
             alpha_mode,
             name,
-        })
+        };
+        // Offsets, scales and rotations beyond this would only make UVs that f32 cannot tell
+        // apart, or non-finite ones.
+        const MAX_TRANSFORM: f32 = 1e6;
+        let unusable = |t: &TextureRef| {
+            let t = t.transform;
+            !t.matrix.iter().chain(&t.offset.to_array()).all(|v| v.is_finite() && v.abs() <= MAX_TRANSFORM)
+        };
+        if material.textures().iter().flatten().any(unusable) {
+            return Err(SceneError::new(
+                self.file,
+                &element,
+                format!("a KHR_texture_transform value is not finite or beyond ±{MAX_TRANSFORM:e}"),
+            ));
+        }
+        if let Some(scale) = m.normal_texture().map(|t| t.scale()).filter(|s| !s.is_finite()) {
+            return Err(SceneError::new(self.file, &element, format!("normalTexture scale {scale} is not finite")));
+        }
+        Ok(material)
     }
 
     /// The texture of `texture` in colour space `space` (decoded once per image and space),

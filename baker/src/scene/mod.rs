@@ -168,6 +168,17 @@ impl Material {
         self.is_emissive() && self.emissive_texture.is_none()
     }
 
+    /// Its base colour, metallic-roughness, normal and emissive textures, in that order (the
+    /// G-buffer's).
+    pub fn textures(&self) -> [Option<TextureRef>; 4] {
+        [
+            self.base_color_texture,
+            self.metallic_roughness_texture,
+            self.normal_texture.map(|n| n.0),
+            self.emissive_texture,
+        ]
+    }
+
     /// Whether the surface point at `uv` is there at all (alpha mask).
     pub fn covers(&self, textures: &[Texture], uv: Vec2) -> bool {
         match self.alpha_mode {
