@@ -17,8 +17,9 @@ fn bake(output: &Path, extra: &[&str]) -> Output {
     rrf(&args, &[])
 }
 
-fn scratch() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("rrf-bake-cluster-{}", std::process::id()));
+/// A fresh folder for test `name`: the tests run in parallel, so each needs its own.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rrf-bake-cluster-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
@@ -32,7 +33,7 @@ fn succeeds(run: Output) -> String {
 
 #[test]
 fn three_shards_per_stage_then_a_merge_make_the_same_model() {
-    let dir = scratch();
+    let dir = scratch("shards");
     let whole = dir.join("whole.safetensors");
     succeeds(bake(&whole, &[]));
 
@@ -64,8 +65,7 @@ fn three_shards_per_stage_then_a_merge_make_the_same_model() {
 
 #[test]
 fn shard_arguments_are_checked() {
-    let dir = scratch().join("args");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = scratch("args");
     let model = dir.join("m.safetensors");
     for (extra, expected) in [
         (&["--stage", "sample", "--shard", "3/3"][..], "expected I/N with 0 <= I < N"),
