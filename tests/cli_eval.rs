@@ -132,8 +132,7 @@ fn held_out_cameras_look_into_the_scene_and_differ_from_training() {
     for c in &configs[scene.views.len()..] {
         assert!(camera_box.contains(c.view.eye) && light_box.contains(c.light), "{c:?}");
         let dir = (c.view.target - c.view.eye).normalize();
-        let depth =
-            geometry.intersect(c.view.eye, dir, f32::INFINITY, &[], &|_, _| true).map_or(f32::INFINITY, |h| h.t);
+        let depth = geometry.intersect(c.view.eye, dir, f32::INFINITY, &[], &|_| true).map_or(f32::INFINITY, |h| h.t);
         assert!(depth >= 0.2 * diagonal, "{}: looks at a surface {depth} m away", c.name);
         assert!(training.iter().all(|t| t.light != c.light && t.viewpoint != c.view.eye));
     }

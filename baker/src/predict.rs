@@ -6,6 +6,7 @@ use rayon::prelude::*;
 
 use crate::model::Model;
 use crate::network::{raw_inputs, reflectance, Component, Network};
+use crate::scene::PlacedLight;
 use crate::trace::{Camera, Radiance, RadianceImage, World};
 
 /// The networks of every object, by object id; `None` for objects without one.
@@ -22,16 +23,11 @@ impl<'a> ObjectNetworks<'a> {
     }
 }
 
-/// The light position the networks see: the moving light's current position.
-pub fn light_position(world: &World) -> Vec3 {
-    world.scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position + world.light_offset)
-}
-
 /// One ray through each pixel centre: emission where it hits an emitter, the object's
-/// networks elsewhere, nothing where it hits nothing.
+/// networks elsewhere (once per light of `world`, at its position, scaled by its `scale`, and
+/// summed), nothing where it hits nothing.
 pub fn predict_image(world: &World, camera: &Camera, model: &Model, width: u32, height: u32) -> RadianceImage {
     let networks = ObjectNetworks::new(world, model);
-    let light = light_position(world);
     let size = Vec2::new(width as f32, height as f32);
     let pixels = (0..width * height)
         .into_par_iter()
@@ -40,10 +36,15 @@ pub fn predict_image(world: &World, camera: &Camera, model: &Model, width: u32, 
             let dir = camera.direction(film);
             let Some(hit) = world.intersect(camera.eye, dir) else { return Radiance::default() };
             let si = world.interaction(camera.eye, dir, hit);
-            let inputs = raw_inputs(si.position, -dir, light, si.shading_normal, si.roughness);
             let object = si.object as usize;
             let r = reflectance(si.bsdf.base_color, si.bsdf.metallic, si.bsdf.specular);
-            let eval = |n: Option<&Network>| n.map_or(Vec3::ZERO, |n| n.evaluate(&inputs) * r);
+            let eval = |n: Option<&Network>| {
+                let Some(n) = n else { return Vec3::ZERO };
+                let lit = |l: &PlacedLight| {
+                    n.evaluate(&raw_inputs(si.position, -dir, l.position, si.shading_normal, si.roughness)) * l.scale
+                };
+                world.lights.iter().map(lit).sum::<Vec3>() * r
+            };
             Radiance {
                 emitted: si.emission,
                 direct: eval(networks.direct[object]),

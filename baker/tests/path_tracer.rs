@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use rrf_baker::glam::{Vec2, Vec3, Vec4};
 use rrf_baker::scene::{
-    AlphaMode, BakePresets, ColorSpace, Cone, Material, Object, Part, PointLight, Scene, Texture, TextureRef,
-    UvTransform, View,
+    Aabb, AlphaMode, BakePresets, ColorSpace, Cone, LightKind, Material, MovingLight, Object, Part, PlacedLight,
+    PointLight, Scene, Texture, TextureRef, UvTransform, View,
 };
 use rrf_baker::trace::integrator::trace_ray;
 use rrf_baker::trace::sampling::Rng;
@@ -303,6 +303,83 @@ fn square_area_light_over_a_plane() {
         let r = estimate(&world, eye, *x, &settings, 50_000, i as u64);
         let relative = (r.direct.x - expected).abs() / expected;
         assert!(relative < 0.005, "{x}: direct {} vs {expected} ({:.3}%)", r.direct.x, 100.0 * relative);
+    }
+}
+
+/// `scene` with light `kind`, now at `at`, as its moving light.
+fn with_moving_light(mut scene: Scene, kind: LightKind, at: Vec3) -> Scene {
+    let bounds = Aabb { min: Vec3::splat(-10.0), max: Vec3::splat(10.0) };
+    scene.moving_light = Some(MovingLight { node_name: "light".into(), kind, default_position: at, bounds });
+    scene
+}
+
+/// Two copies of a moving point light, each recoloured, over a Lambert plane: the sum of
+/// the closed form of each, ρ/π · Σ s_k I cos θ_k / d_k², exactly.
+#[test]
+fn copies_of_a_point_light_add_up() {
+    let (rho, intensity) = (0.5f32, Vec3::new(2.0, 1.0, 0.5));
+    let trained = Vec3::new(0.0, 1.0, 0.0);
+    let s = scene(vec![(square(Vec3::ZERO, 50.0, 1.0), material(rho, 0.0))], vec![lamp(trained, intensity)]);
+    let s = with_moving_light(s, LightKind::Point(0), trained);
+    let lights = [
+        PlacedLight { position: Vec3::new(-0.5, 1.2, 0.3), scale: Vec3::new(1.0, 0.2, 0.1) },
+        PlacedLight { position: Vec3::new(0.8, 0.6, -0.4), scale: Vec3::new(0.5, 0.5, 3.0) },
+    ];
+    let geometry = Geometry::new(&s);
+    let world = World::with_lights(&s, &geometry, &lights);
+    let settings = TraceSettings { max_depth: 8, rr_depth: None };
+    for x in [Vec3::ZERO, Vec3::new(0.5, 0.0, 0.0), Vec3::new(-1.0, 0.0, 2.0)] {
+        let r = estimate(&world, x + Vec3::new(0.3, 0.4, 0.2), x, &settings, 4, 0);
+        let lit = |l: &PlacedLight| {
+            let d = l.position - x;
+            rho / PI * intensity * l.scale * (l.position.y / d.length()) / d.length_squared()
+        };
+        let expected: Vec3 = lights.iter().map(lit).sum();
+        assert!(
+            (r.direct - expected).abs().max_element() <= 1e-4 * expected.max_element(),
+            "{x}: {} vs {expected}",
+            r.direct
+        );
+    }
+}
+
+/// Two copies of a moving square area light, at different heights and recoloured, over a
+/// Lambert plane: ρ · Le · Σ s_k F_k, with light sampling picking among both copies' triangles
+/// and MIS weighing BSDF-sampled hits on either. A camera ray that meets a copy sees its
+/// scaled emission.
+#[test]
+fn copies_of_a_square_light_add_up() {
+    let (rho, half, le) = (0.6f32, 0.15f32, 10.0f32);
+    let trained = Vec3::new(0.0, 0.8, 0.0);
+    let s = scene(
+        vec![(square(Vec3::ZERO, 50.0, 1.0), material(rho, 0.0)), (square(trained, half, -1.0), material(0.0, le))],
+        vec![],
+    );
+    let s = with_moving_light(s, LightKind::Area(1), trained);
+    let lights = [
+        PlacedLight { position: Vec3::new(0.1, 0.8, 0.0), scale: Vec3::new(1.0, 0.25, 0.5) },
+        PlacedLight { position: Vec3::new(-0.3, 0.5, 0.2), scale: Vec3::new(0.5, 2.0, 1.0) },
+    ];
+    let geometry = Geometry::new(&s);
+    let world = World::with_lights(&s, &geometry, &lights);
+    let settings = TraceSettings { max_depth: 2, rr_depth: None };
+    for (i, x) in [Vec3::ZERO, Vec3::new(0.6, 0.0, -0.3)].iter().enumerate() {
+        let lit = |l: &PlacedLight| {
+            let (cx, cz, h) = (l.position.x - x.x, l.position.z - x.z, l.position.y);
+            let (x1, x2, z1, z2) = (cx - half, cx + half, cz - half, cz + half);
+            let f = corner_form_factor(x2, z2, h) - corner_form_factor(x1, z2, h) - corner_form_factor(x2, z1, h)
+                + corner_form_factor(x1, z1, h);
+            rho * le * f * l.scale
+        };
+        let expected: Vec3 = lights.iter().map(lit).sum();
+        let r = estimate(&world, *x + Vec3::new(-0.2, 0.3, 0.25), *x, &settings, 50_000, i as u64);
+        let relative = ((r.direct - expected).abs() / expected).max_element();
+        assert!(relative < 0.01, "{x}: direct {} vs {expected} ({:.3}%)", r.direct, 100.0 * relative);
+    }
+    for l in &lights {
+        let below = l.position - Vec3::new(0.02, 0.3, -0.01);
+        let r = estimate(&world, below, l.position, &settings, 1, 0);
+        assert!((r.emitted - le * l.scale).abs().max_element() < 1e-4, "{}: {}", l.position, r.emitted);
     }
 }
 

@@ -57,7 +57,7 @@ pub fn held_out(scene: &Scene, geometry: &Geometry, random: usize, seed: u64) ->
             let candidate = centre + jitter * extent * 0.5;
             let dir = (candidate - eye).normalize_or_zero();
             // Alpha masks count as solid here: a view target need not see through foliage.
-            let solid = |_, _| true;
+            let solid = |_| true;
             let deep = dir != Vec3::ZERO
                 && geometry
                     .intersect(eye, dir, f32::INFINITY, &[], &solid)

@@ -262,6 +262,19 @@ pub struct MovingLight {
     pub bounds: Aabb,
 }
 
+/// One light of a configuration: a copy of the moving light at `position`, emitting the
+/// glTF's emission times `scale` (per channel: colour × intensity).
+///
+/// Light transport is linear in the emission, so one trained model serves any number of
+/// copies: a renderer evaluates the networks once per copy, at its position, scales each by
+/// the copy's `scale` and sums them (the RRF paper's several lights). The path tracer places
+/// every copy in the scene instead.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlacedLight {
+    pub position: Vec3,
+    pub scale: Vec3,
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum LightKind {
     /// Index into [`Scene::point_lights`].
@@ -328,6 +341,23 @@ impl Scene {
     /// Emissive objects: every object with an emissive material is an area light.
     pub fn area_lights(&self) -> impl Iterator<Item = &Object> {
         self.objects.iter().filter(|o| o.parts.iter().any(|p| self.materials[p.material as usize].is_emissive()))
+    }
+
+    /// The moving light where the glTF puts it, as bright as the glTF makes it: the light the
+    /// networks were trained with. Without a moving light, a light at the origin (the
+    /// networks' light inputs are then constant).
+    pub fn default_light(&self) -> PlacedLight {
+        let position = self.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position);
+        PlacedLight { position, scale: Vec3::ONE }
+    }
+
+    /// The lights besides the moving one, by name: the networks learned their light together
+    /// with the moving light's, so it cannot be scaled or copied with the moving light.
+    pub fn static_lights(&self) -> Vec<String> {
+        let moving = self.moving_light.as_ref().map(|l| l.kind);
+        let points = self.point_lights.iter().enumerate().filter(|&(i, _)| moving != Some(LightKind::Point(i)));
+        let areas = self.area_lights().filter(|o| moving != Some(LightKind::Area(o.id)));
+        points.map(|(_, l)| l.name.clone()).chain(areas.map(|o| o.name.clone())).collect()
     }
 
     /// The bounding box of all geometry.

@@ -42,15 +42,27 @@ pub struct Geometry {
     pub moving: Vec<u32>,
 }
 
-/// The alpha test: whether masked triangle `triangle` is there at distance `t` along the ray
+/// The alpha test: whether the masked triangle of `hit` is there, at `hit.t` along the ray
 /// being traced.
-pub type Covers<'a> = &'a dyn Fn(u32, f32) -> bool;
+pub type Covers<'a> = &'a dyn Fn(Hit) -> bool;
 
 /// The closest intersection along a ray.
 #[derive(Clone, Copy, Debug)]
 pub struct Hit {
     pub t: f32,
     pub triangle: u32,
+    /// Which copy of the moving light a moving triangle belongs to (see [`MovedTriangle`]);
+    /// 0 for every other triangle.
+    pub copy: u32,
+}
+
+/// A triangle of the moving area light where one copy of the light puts it. A configuration
+/// with several lights holds one copy of the light's triangles per light.
+#[derive(Clone, Copy)]
+pub struct MovedTriangle {
+    pub triangle: u32,
+    pub copy: u32,
+    pub placed: RtTriangle,
 }
 
 impl Geometry {
@@ -116,25 +128,33 @@ impl Geometry {
         info.vertices.map(|v| self.positions[v as usize] + shift)
     }
 
-    /// The moving light's triangles for a light `offset` from its default position.
-    pub fn moved_triangles(&self, offset: Vec3) -> Vec<(u32, RtTriangle)> {
-        self.moving
-            .iter()
-            .map(|&id| {
-                let [a, b, c] = self.corners(id, offset);
-                (id, RtTriangle::new(a.into(), b.into(), c.into()))
+    /// The moving light's triangles, one copy per light, each light `offsets[copy]` from the
+    /// light's default position.
+    pub fn moved_triangles(&self, offsets: &[Vec3]) -> Vec<MovedTriangle> {
+        (0..offsets.len() as u32)
+            .flat_map(|copy| {
+                self.moving.iter().map(move |&triangle| {
+                    let [a, b, c] = self.corners(triangle, offsets[copy as usize]);
+                    MovedTriangle { triangle, copy, placed: RtTriangle::new(a.into(), b.into(), c.into()) }
+                })
             })
             .collect()
     }
 
-    /// `t` if the ray meets `triangle` there and, for a masked triangle, `covers(triangle, t)`
-    /// says the surface is there; else infinity.
-    fn test(&self, triangle: u32, t: f32, covers: Covers) -> f32 {
-        if t < f32::INFINITY && self.triangles[triangle as usize].masked && !covers(triangle, t) {
+    /// `hit.t` if the ray meets the triangle there (it is finite) and, for a masked triangle,
+    /// `covers(hit)` says the surface is there; else infinity.
+    fn test(&self, hit: Hit, covers: Covers) -> f32 {
+        if hit.t < f32::INFINITY && self.triangles[hit.triangle as usize].masked && !covers(hit) {
             f32::INFINITY
         } else {
-            t
+            hit.t
         }
+    }
+
+    /// `test` of static triangle `i` in BVH order.
+    fn test_static(&self, ray: &Ray, i: usize, covers: Covers) -> f32 {
+        let hit = Hit { t: self.bvh_triangles[i].intersect(ray), triangle: self.bvh_ids[i], copy: 0 };
+        self.test(hit, covers)
     }
 
     /// Closest hit in `[tmin, tmax]` against the BVH and the moved light triangles; a masked
@@ -144,39 +164,37 @@ impl Geometry {
         origin: Vec3,
         dir: Vec3,
         tmax: f32,
-        moved: &[(u32, RtTriangle)],
+        moved: &[MovedTriangle],
         covers: Covers,
     ) -> Option<Hit> {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
         let mut hit = RayHit::none();
         let mut best: Option<Hit> = None;
-        if !self.bvh_triangles.is_empty()
-            && self.bvh.ray_traverse(ray, &mut hit, |r, i| {
-                self.test(self.bvh_ids[i], self.bvh_triangles[i].intersect(r), covers)
-            })
+        if !self.bvh_triangles.is_empty() && self.bvh.ray_traverse(ray, &mut hit, |r, i| self.test_static(r, i, covers))
         {
-            best = Some(Hit { t: hit.t, triangle: self.bvh_ids[hit.primitive_id as usize] });
+            best = Some(Hit { t: hit.t, triangle: self.bvh_ids[hit.primitive_id as usize], copy: 0 });
         }
-        for (id, tri) in moved {
+        for m in moved {
             let limit = best.map_or(tmax, |h| h.t);
-            let t = self.test(*id, tri.intersect(&Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, limit)), covers);
+            let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, limit);
+            let candidate = Hit { t: m.placed.intersect(&ray), triangle: m.triangle, copy: m.copy };
+            let t = self.test(candidate, covers);
             if t < limit {
-                best = Some(Hit { t, triangle: *id });
+                best = Some(candidate);
             }
         }
         best
     }
 
     /// Whether anything lies between `origin` and `origin + dir · tmax`.
-    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[(u32, RtTriangle)], covers: Covers) -> bool {
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[MovedTriangle], covers: Covers) -> bool {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
-        if !self.bvh_triangles.is_empty()
-            && !self
-                .bvh
-                .ray_traverse_miss(ray, |r, i| self.test(self.bvh_ids[i], self.bvh_triangles[i].intersect(r), covers))
-        {
+        if !self.bvh_triangles.is_empty() && !self.bvh.ray_traverse_miss(ray, |r, i| self.test_static(r, i, covers)) {
             return true;
         }
-        moved.iter().any(|(id, tri)| self.test(*id, tri.intersect(&ray), covers) < tmax)
+        moved.iter().any(|m| {
+            let hit = Hit { t: m.placed.intersect(&ray), triangle: m.triangle, copy: m.copy };
+            self.test(hit, covers) < tmax
+        })
     }
 }

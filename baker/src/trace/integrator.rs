@@ -184,7 +184,7 @@ pub fn radiance_leaving(
         let next = world.interaction(origin, wi, hit);
         segments += 1;
         if next.emission != Vec3::ZERO {
-            let light_pdf = world.area_light_pdf(hit.triangle, wi, hit.t);
+            let light_pdf = world.area_light_pdf(hit, wi);
             out.add(segments, beta * next.emission * power_heuristic(sample.pdf, light_pdf));
         }
         if let Some(rr_depth) = settings.rr_depth {

@@ -1,13 +1,12 @@
-//! One light configuration of a scene: the geometry with the moving light in place, the
-//! emitters to sample, and surface interactions at hits.
+//! One light configuration of a scene: the geometry with the moving light in place (a copy of
+//! it per light), the emitters to sample, and surface interactions at hits.
 
 use glam::{Vec2, Vec3, Vec4};
-use obvhs::rt_triangle::RtTriangle;
 
 use super::bsdf::Bsdf;
-use super::geometry::{Geometry, Hit};
+use super::geometry::{Geometry, Hit, MovedTriangle};
 use super::sampling::uniform_triangle;
-use crate::scene::{Cone, LightKind, Scene, TextureRef};
+use crate::scene::{Cone, LightKind, PlacedLight, Scene, TextureRef};
 
 /// An emissive triangle where this configuration puts it, with the probability of choosing
 /// it for next-event estimation.
@@ -38,13 +37,16 @@ pub struct PointLightAt {
 pub struct World<'a> {
     pub scene: &'a Scene,
     pub geometry: &'a Geometry,
-    /// How far the moving light is from where the glTF puts it.
-    pub light_offset: Vec3,
-    moved: Vec<(u32, RtTriangle)>,
+    /// The configuration's lights: copies of the moving light, at least one.
+    pub lights: Vec<PlacedLight>,
+    /// How far each copy of the moving light is from where the glTF puts it.
+    offsets: Vec<Vec3>,
+    moved: Vec<MovedTriangle>,
     emitters: Vec<Emitter>,
     /// Cumulative emitter probabilities, for sampling by binary search.
     emitter_cdf: Vec<f32>,
-    /// Emitter index by triangle id, for the MIS weight of a BSDF-sampled hit.
+    /// Emitter index by triangle id, for the MIS weight of a BSDF-sampled hit; a moving
+    /// triangle's copies follow its first one.
     emitter_of_triangle: Vec<u32>,
     pub point_lights: Vec<PointLightAt>,
 }
@@ -81,50 +83,74 @@ const NO_EMITTER: u32 = u32::MAX;
 impl<'a> World<'a> {
     /// The scene with its moving light at `light_position` (or where the glTF puts it).
     pub fn new(scene: &'a Scene, geometry: &'a Geometry, light_position: Option<Vec3>) -> Self {
+        let default = scene.default_light();
+        let position = light_position.unwrap_or(default.position);
+        World::with_lights(scene, geometry, &[PlacedLight { position, ..default }])
+    }
+
+    /// The scene with a copy of its moving light for each of `lights` (at least one), in its
+    /// place and scaled by its `scale`; the scene's other lights stay as they are.
+    pub fn with_lights(scene: &'a Scene, geometry: &'a Geometry, lights: &[PlacedLight]) -> Self {
+        assert!(!lights.is_empty(), "a configuration has at least one light");
         let moving = scene.moving_light.as_ref();
-        let light_offset = match (moving, light_position) {
-            (Some(light), Some(p)) => p - light.default_position,
-            _ => Vec3::ZERO,
-        };
+        let offsets: Vec<Vec3> =
+            lights.iter().map(|l| moving.map_or(Vec3::ZERO, |m| l.position - m.default_position)).collect();
         let mut point_lights: Vec<PointLightAt> = scene
             .point_lights
             .iter()
             .map(|l| PointLightAt { position: l.position, intensity: l.intensity, cone: l.cone })
             .collect();
         if let Some(LightKind::Point(i)) = moving.map(|l| l.kind) {
-            point_lights[i].position += light_offset;
+            let trained = point_lights[i];
+            let copy = |k: usize| PointLightAt {
+                position: trained.position + offsets[k],
+                intensity: trained.intensity * lights[k].scale,
+                ..trained
+            };
+            point_lights[i] = copy(0);
+            point_lights.extend((1..lights.len()).map(copy));
         }
 
         let mut emitters = Vec::new();
         let mut emitter_of_triangle = vec![NO_EMITTER; geometry.triangles.len()];
-        let mut total = 0.0;
         for (id, info) in geometry.triangles.iter().enumerate() {
             let material = &scene.materials[info.material as usize];
             if !material.is_emissive() {
                 continue;
             }
-            let corners = geometry.corners(id as u32, light_offset);
-            let [a, b, c] = corners;
-            let cross = (b - a).cross(c - a);
-            let area = 0.5 * cross.length();
-            if area <= 0.0 {
-                continue;
-            }
             let uvs = info.vertices.map(|v| geometry.uvs[v as usize]);
             let texture = material.emissive_texture;
-            let power = luminance(material.emission) * area * texture.map_or(1.0, |t| textured_share(scene, t, uvs));
-            emitter_of_triangle[id] = emitters.len() as u32;
-            emitters.push(Emitter {
-                corners,
-                uvs,
-                normal: cross.normalize(),
-                emission: material.emission,
-                texture,
-                double_sided: material.double_sided,
-                area,
-                probability: power,
-            });
-            total += power;
+            let copies = if info.moving { lights.len() } else { 1 };
+            for copy in 0..copies {
+                let corners = geometry.corners(id as u32, offsets[copy]);
+                let [a, b, c] = corners;
+                let cross = (b - a).cross(c - a);
+                let area = 0.5 * cross.length();
+                if area <= 0.0 {
+                    break;
+                }
+                let emission = material.emission * if info.moving { lights[copy].scale } else { Vec3::ONE };
+                let power = luminance(emission) * area * texture.map_or(1.0, |t| textured_share(scene, t, uvs));
+                if copy == 0 {
+                    emitter_of_triangle[id] = emitters.len() as u32;
+                }
+                emitters.push(Emitter {
+                    corners,
+                    uvs,
+                    normal: cross.normalize(),
+                    emission,
+                    texture,
+                    double_sided: material.double_sided,
+                    area,
+                    probability: power,
+                });
+            }
+        }
+        let total: f32 = emitters.iter().map(|e| e.probability).sum();
+        if total <= 0.0 {
+            // Every copy of the only area light is black: nothing to sample.
+            emitters.clear();
+            emitter_of_triangle.fill(NO_EMITTER);
         }
         let mut cdf = Vec::with_capacity(emitters.len());
         let mut running = 0.0;
@@ -136,8 +162,9 @@ impl<'a> World<'a> {
         World {
             scene,
             geometry,
-            light_offset,
-            moved: geometry.moved_triangles(light_offset),
+            lights: lights.to_vec(),
+            moved: geometry.moved_triangles(&offsets),
+            offsets,
             emitters,
             emitter_cdf: cdf,
             emitter_of_triangle,
@@ -146,19 +173,24 @@ impl<'a> World<'a> {
     }
 
     pub fn intersect(&self, origin: Vec3, dir: Vec3) -> Option<Hit> {
-        let covers = |triangle, t| self.covers(triangle, origin + dir * t);
+        let covers = |hit: Hit| self.covers(hit, origin + dir * hit.t);
         self.geometry.intersect(origin, dir, f32::INFINITY, &self.moved, &covers)
     }
 
     pub fn occluded(&self, origin: Vec3, dir: Vec3, distance: f32) -> bool {
-        let covers = |triangle, t| self.covers(triangle, origin + dir * t);
+        let covers = |hit: Hit| self.covers(hit, origin + dir * hit.t);
         self.geometry.occluded(origin, dir, distance, &self.moved, &covers)
     }
 
-    /// The alpha test of `triangle` at `point`, a point on it.
-    fn covers(&self, triangle: u32, point: Vec3) -> bool {
-        let info = &self.geometry.triangles[triangle as usize];
-        let b = barycentrics(self.geometry.corners(triangle, self.light_offset), point);
+    /// The corners of the triangle of `hit`, moved with its copy of the light if it moves.
+    fn corners(&self, hit: Hit) -> [Vec3; 3] {
+        self.geometry.corners(hit.triangle, self.offsets[hit.copy as usize])
+    }
+
+    /// The alpha test of the triangle of `hit` at `point`, a point on it.
+    fn covers(&self, hit: Hit, point: Vec3) -> bool {
+        let info = &self.geometry.triangles[hit.triangle as usize];
+        let b = barycentrics(self.corners(hit), point);
         let uv = interpolate(info.vertices.map(|v| self.geometry.uvs[v as usize]), b);
         self.scene.materials[info.material as usize].covers(&self.scene.textures, uv)
     }
@@ -171,7 +203,7 @@ impl<'a> World<'a> {
     pub fn interaction(&self, origin: Vec3, dir: Vec3, hit: Hit) -> Interaction {
         let g = self.geometry;
         let info = g.triangles[hit.triangle as usize];
-        let [p0, p1, p2] = g.corners(hit.triangle, self.light_offset);
+        let [p0, p1, p2] = self.corners(hit);
         let b = barycentrics([p0, p1, p2], origin + dir * hit.t);
         let position = interpolate([p0, p1, p2], b);
         let uv = interpolate(info.vertices.map(|v| g.uvs[v as usize]), b);
@@ -194,13 +226,14 @@ impl<'a> World<'a> {
             ns = -ns;
         }
         let emits = front_face || material.double_sided;
+        let scale = if info.moving { self.lights[hit.copy as usize].scale } else { Vec3::ONE };
         Interaction {
             position,
             geometric_normal: ng,
             shading_normal: ns,
             front_face,
             bsdf: Bsdf::new(shading.base_color, shading.metallic, shading.roughness, material.specular),
-            emission: if emits { shading.emission } else { Vec3::ZERO },
+            emission: if emits { shading.emission * scale } else { Vec3::ZERO },
             object: info.object,
             uv,
             roughness: shading.roughness,
@@ -234,13 +267,14 @@ impl<'a> World<'a> {
     }
 
     /// Solid-angle density with which [`World::sample_area_light`] would have produced the
-    /// point at distance `t` along direction `dir` on emissive triangle `triangle`.
-    pub fn area_light_pdf(&self, triangle: u32, dir: Vec3, t: f32) -> f32 {
-        let index = self.emitter_of_triangle[triangle as usize];
+    /// point of `hit`, met along direction `dir`.
+    pub fn area_light_pdf(&self, hit: Hit, dir: Vec3) -> f32 {
+        let index = self.emitter_of_triangle[hit.triangle as usize];
         if index == NO_EMITTER {
             return 0.0;
         }
-        let e = &self.emitters[index as usize];
+        let e = &self.emitters[(index + hit.copy) as usize];
+        let t = hit.t;
         let cos_light = e.normal.dot(dir).abs();
         if cos_light <= 0.0 {
             return 0.0;
