@@ -151,6 +151,7 @@ use layout::*;
 fn network_layout_glsl() -> String {
     let constants = [
         ("INPUTS", INPUTS),
+        ("LIGHT_INPUT", LIGHT_INPUT),
         ("HIDDEN1", HIDDEN1),
         ("HIDDEN2", HIDDEN2),
         ("OUTPUTS", OUTPUTS),
@@ -174,6 +175,10 @@ fn network_layout_glsl() -> String {
 /// GLSL for the direct and indirect networks with every weight a specialization constant,
 /// fully unrolled: glslang accepts no array built from specialization constants, and the
 /// driver folds the weights into the code when it creates the pipeline.
+///
+/// Each network is two functions, so that several lights share the per-pixel work:
+/// `NAME_surface(x, s)` sums the first layer over every input but the light position, and
+/// `NAME_lit(s, light)` adds the light position's share and runs the rest of the network.
 ///
 /// Constant ids follow the parameter layout of `network.rs` (w1 [20][13], b1, w2 [10][20],
 /// b2, w3 [3][10], b3), the direct network's from `FIRST_PARAMETER_ID`, then the indirect's.
@@ -209,10 +214,24 @@ fn specialized_networks_glsl() -> String {
             sum
         };
         let function = prefix.to_lowercase();
-        let _ = writeln!(s, "\nvec3 {function}_network(float x[{INPUTS}]) {{");
-        let x: Vec<String> = (0..INPUTS).map(|i| format!("x[{i}]")).collect();
+        // First layer, part 1: the bias and the inputs other than the light position, once
+        // per pixel. Part 2 adds the light position's share, once per light.
+        let is_light = |column: usize| (LIGHT_INPUT..LIGHT_INPUT + 3).contains(&column);
+        let _ = writeln!(s, "\nvoid {function}_surface(float x[{INPUTS}], out float s[{HIDDEN1}]) {{");
         for j in 0..HIDDEN1 {
-            let _ = writeln!(s, "    float h1_{j} = network_tanh({});", dot("1", j, &x));
+            let mut sum = format!("{prefix}_B1_{j}");
+            for column in (0..INPUTS).filter(|&c| !is_light(c)) {
+                sum = format!("fma({prefix}_W1_{j}_{column}, x[{column}], {sum})");
+            }
+            let _ = writeln!(s, "    s[{j}] = {sum};");
+        }
+        let _ = writeln!(s, "}}\n\nvec3 {function}_lit(float s[{HIDDEN1}], vec3 light) {{");
+        for j in 0..HIDDEN1 {
+            let mut sum = format!("s[{j}]");
+            for (axis, column) in (LIGHT_INPUT..LIGHT_INPUT + 3).enumerate() {
+                sum = format!("fma({prefix}_W1_{j}_{column}, light[{axis}], {sum})");
+            }
+            let _ = writeln!(s, "    float h1_{j} = network_tanh({sum});");
         }
         let h1: Vec<String> = (0..HIDDEN1).map(|j| format!("h1_{j}")).collect();
         for k in 0..HIDDEN2 {

@@ -14,6 +14,7 @@ layout(location = 2) flat in uint in_object;
 layout(location = 3) flat in uint in_material;
 layout(location = 4) in vec2 in_uv;
 layout(location = 5) in vec4 in_tangent;
+layout(location = 6) flat in vec3 in_emission_scale;
 
 // Whether this pipeline's draws use textures; without, the texture code is compiled out.
 layout(constant_id = 0) const bool TEXTURED = true;
@@ -46,6 +47,7 @@ void main() {
     if (!gl_FrontFacing && materials[m].emits_back == 0u) {
         emissive = vec3(0.0);
     }
+    emissive *= in_emission_scale;
     Shading shading = Shading(base.rgb, emissive, factors.y * metallic_roughness.g, factors.x * metallic_roughness.b);
     out_surface = uvec4(floatBitsToUint(in_position), encode_normal(gl_FrontFacing ? n : -n));
     // Object ids are stored +1 so that 0 means "nothing here".

@@ -1,6 +1,7 @@
 #version 450
 // G-buffer pass, vertex stage: world-space attributes straight through, except that the
-// moving light's own geometry follows the light by a per-frame offset.
+// moving light's own geometry follows the light: it is drawn once per copy of the light, each
+// draw with that copy's offset and emission scale.
 
 layout(location = 0) in vec3 in_position;
 layout(location = 1) in vec3 in_normal;
@@ -13,6 +14,7 @@ layout(push_constant) uniform Frame {
     mat4 view_projection;
     vec4 eye;
     vec4 light_offset;
+    vec4 light_scale;
     uint light_object; // object id + 1 of the moving light; 0: none
 } frame;
 
@@ -22,9 +24,13 @@ layout(location = 2) flat out uint out_object;
 layout(location = 3) flat out uint out_material;
 layout(location = 4) out vec2 out_uv;
 layout(location = 5) out vec4 out_tangent;
+// What the emission is multiplied by: the light copy's scale on the moving light, else 1.
+layout(location = 6) flat out vec3 out_emission_scale;
 
 void main() {
-    vec3 position = in_position + (in_object + 1u == frame.light_object ? frame.light_offset.xyz : vec3(0.0));
+    bool moving = in_object + 1u == frame.light_object;
+    vec3 position = in_position + (moving ? frame.light_offset.xyz : vec3(0.0));
+    out_emission_scale = moving ? frame.light_scale.rgb : vec3(1.0);
     out_position = position;
     out_normal = in_normal;
     out_object = in_object;

@@ -1,22 +1,22 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
 // Network pass, weights in a storage buffer: per pixel, the 13 inputs from the G-buffer and
-// the constants, then that object's direct and indirect networks.
+// the constants, then that object's direct and indirect networks, summed over the lights.
 //
 // Per object slot (object id), OBJECT_STRIDE floats: direct parameters, indirect parameters,
 // input_min[13], input_max[13], direct output scale, indirect output scale, present (1 or 0).
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
-// Bindings 0-3 (G-buffer, materials): network_inputs.glsl.
-layout(binding = 4) readonly buffer Weights { float weights[]; };
-layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
+// Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
+layout(binding = 5) readonly buffer Weights { float weights[]; };
+layout(binding = 6, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = 7, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = 8, rgba32f) uniform writeonly image2D out_gi;
 
 layout(push_constant) uniform Constants {
     vec4 eye;
-    vec4 light;
+    uint light_count;
 } constants;
 
 #include "network.glsl"
@@ -36,14 +36,27 @@ void main() {
         uint base = (object - 1u) * OBJECT_STRIDE;
         uint ranges = base + 2 * PARAMETERS;
         if (weights[ranges + 2 * INPUTS + 2] > 0.5) {
-            float raw[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz, constants.light.xyz);
+            float raw[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
             float x[INPUTS];
             for (int i = 0; i < INPUTS; ++i) {
                 x[i] = normalize_input(raw[i], weights[ranges + i], weights[ranges + INPUTS + i]);
             }
+            float direct_sums[HIDDEN1];
+            float indirect_sums[HIDDEN1];
+            forward_surface(base, x, direct_sums);
+            forward_surface(base + PARAMETERS, x, indirect_sums);
+            for (uint l = 0u; l < constants.light_count; ++l) {
+                vec3 light;
+                for (int i = 0; i < 3; ++i) {
+                    uint r = ranges + LIGHT_INPUT + i;
+                    light[i] = normalize_input(lights[l].position[i], weights[r], weights[r + INPUTS]);
+                }
+                direct += forward_lit(base, direct_sums, light) * lights[l].scale.rgb;
+                indirect += forward_lit(base + PARAMETERS, indirect_sums, light) * lights[l].scale.rgb;
+            }
             vec3 reflectance = surface_reflectance(id, shading);
-            direct = forward(base, x) * weights[ranges + 2 * INPUTS] * reflectance;
-            indirect = forward(base + PARAMETERS, x) * weights[ranges + 2 * INPUTS + 1] * reflectance;
+            direct *= weights[ranges + 2 * INPUTS] * reflectance;
+            indirect *= weights[ranges + 2 * INPUTS + 1] * reflectance;
         }
     }
     imageStore(out_direct, pixel, vec4(direct, 1.0));

@@ -11,7 +11,7 @@ use anyhow::Result;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::network::Component;
-use rrf_baker::scene::{Scene, View};
+use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
 use rrf_renderer::network_pass::{NetworkConstants, NetworkPass, NetworkShaders, ObjectNetworks, Variant};
 use rrf_renderer::overlay::{OverlayPass, TextGrid};
@@ -20,7 +20,10 @@ use rrf_renderer::sync::{run_passes, Pass, Resource, ResourceStates};
 use rrf_renderer::tonemap::TonemapPass;
 use rrf_renderer::{vk, Context, Destroy, Image};
 
-use crate::gpu_scene::{gbuffer_constants, gbuffer_mesh, moving_light_object, network_materials, surface_materials};
+use crate::gpu_scene::{
+    gbuffer_constants, gbuffer_mesh, light_copies, moving_light_object, network_lights, network_materials,
+    surface_materials,
+};
 use crate::shaders;
 
 /// Each object's networks, by object id; `None` for objects the model has none for.
@@ -98,8 +101,8 @@ pub enum FrameOutput {
 #[derive(Clone, Debug)]
 pub struct FrameSettings {
     pub view: View,
-    /// Where the moving light is.
-    pub light: Vec3,
+    /// The lights: copies of the moving light (1 to `network_pass::MAX_LIGHTS`).
+    pub lights: Vec<PlacedLight>,
     /// 2^EV.
     pub exposure_scale: f32,
     pub shown: Shown,
@@ -123,7 +126,7 @@ pub struct GpuFrame {
     /// writes the display image itself).
     tonemaps: Vec<TonemapPass>,
     overlay: OverlayPass,
-    /// Where the glTF puts the moving light.
+    /// Where the glTF puts the moving light: each light's copy of its geometry moves from here.
     default_light: Vec3,
     /// The object id of the moving light's own geometry, which follows the light.
     light_object: Option<u32>,
@@ -173,7 +176,7 @@ impl GpuFrame {
             ldr: ldr.keep(),
             tonemaps: tonemaps.keep(),
             overlay,
-            default_light: scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position),
+            default_light: scene.default_light().position,
             light_object: moving_light_object(scene),
             states: RefCell::default(),
         };
@@ -269,14 +272,11 @@ impl GpuFrame {
     ) -> Result<Vec<Pass<'a>>> {
         let extent = self.extent();
         let aspect = extent.width as f32 / extent.height as f32;
-        let g = gbuffer_constants(&settings.view, aspect, settings.light - self.default_light, self.light_object);
-        let n = NetworkConstants {
-            eye: g.eye,
-            light: settings.light.extend(1.0).to_array(),
-            exposure_scale: settings.exposure_scale,
-            shown: settings.shown.code(),
-        };
-        let mut passes = vec![self.gbuffer.pass(ctx, &self.targets, &self.mesh, g)];
+        let g = gbuffer_constants(&settings.view, aspect, self.light_object);
+        let lights = network_lights(&settings.lights);
+        let n = NetworkConstants::new(g.eye, &lights, settings.exposure_scale, settings.shown.code())?;
+        let copies = light_copies(self.default_light, &settings.lights);
+        let mut passes = vec![self.gbuffer.pass(ctx, &self.targets, &self.mesh, g, copies)];
         let stamp = |passes: &mut Vec<Pass>, index: u32| {
             if let (Some(pool), Some(last)) = (timestamps, passes.last_mut()) {
                 last.timestamp = Some((pool, index));

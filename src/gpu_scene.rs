@@ -2,8 +2,9 @@
 //! camera matches the path tracer's ([`rrf_baker::trace::Camera`]) pixel for pixel.
 
 use rrf_baker::glam::{Mat4, Vec3, Vec4};
-use rrf_baker::scene::{self, AlphaMode, ColorSpace, LightKind, Scene, View};
-use rrf_renderer::gbuffer::{GBufferConstants, GBufferVertex, SurfaceMaterial, TextureRef};
+use rrf_baker::scene::{self, AlphaMode, ColorSpace, LightKind, PlacedLight, Scene, View};
+use rrf_renderer::gbuffer::{GBufferConstants, GBufferVertex, LightCopy, SurfaceMaterial, TextureRef};
+use rrf_renderer::network_pass::NetworkLight;
 
 /// The object id of the moving light's own geometry (an area light), if it has any.
 pub fn moving_light_object(scene: &Scene) -> Option<u32> {
@@ -13,8 +14,22 @@ pub fn moving_light_object(scene: &Scene) -> Option<u32> {
     }
 }
 
+/// Where the G-buffer draws the moving light's geometry for each of `lights`, given where the
+/// glTF puts the light (`default`), and how its emission is scaled there.
+pub fn light_copies(default: Vec3, lights: &[PlacedLight]) -> Vec<LightCopy> {
+    lights.iter().map(|l| LightCopy { offset: (l.position - default).to_array(), scale: l.scale.to_array() }).collect()
+}
+
+/// `lights` as the network pass reads them.
+pub fn network_lights(lights: &[PlacedLight]) -> Vec<NetworkLight> {
+    lights
+        .iter()
+        .map(|l| NetworkLight { position: l.position.extend(1.0).to_array(), scale: l.scale.extend(0.0).to_array() })
+        .collect()
+}
+
 /// The scene's vertices where the glTF puts them, and its triangles as indices into them; the
-/// moving light's geometry follows the light through [`GBufferConstants::light_offset`]. A
+/// moving light's geometry follows each light through a [`LightCopy`]. A
 /// vertex is shared by the triangles of one object part (one material).
 pub fn gbuffer_mesh(scene: &Scene) -> (Vec<GBufferVertex>, Vec<u32>) {
     let mut vertices = Vec::new();
@@ -101,9 +116,9 @@ pub fn surface_materials(scene: &Scene) -> (Vec<SurfaceMaterial>, Vec<u32>) {
 }
 
 /// The G-buffer pass's constants: the view-projection into Vulkan clip space (y down, depth
-/// 0 at `NEAR` to 1 at `FAR`), and the geometry of object `light_object` (the moving light's)
-/// moved by `light_offset`.
-pub fn gbuffer_constants(view: &View, aspect: f32, light_offset: Vec3, light_object: Option<u32>) -> GBufferConstants {
+/// 0 at `NEAR` to 1 at `FAR`), and object `light_object` (the moving light's), which the pass
+/// draws once per light copy.
+pub fn gbuffer_constants(view: &View, aspect: f32, light_object: Option<u32>) -> GBufferConstants {
     const NEAR: f32 = 0.01;
     const FAR: f32 = 1000.0;
     let forward = (view.target - view.eye).normalize();
@@ -126,7 +141,8 @@ pub fn gbuffer_constants(view: &View, aspect: f32, light_offset: Vec3, light_obj
     GBufferConstants {
         view_projection: (projection * world_to_view).to_cols_array_2d(),
         eye: view.eye.extend(1.0).to_array(),
-        light_offset: light_offset.extend(0.0).to_array(),
+        light_offset: [0.0; 4],
+        light_scale: [1.0; 4],
         light_object: light_object.map_or(0, |id| id + 1),
         pad: [0; 3],
     }

@@ -10,6 +10,7 @@ pub mod frame_stats;
 pub mod gpu_frame;
 pub mod gpu_scene;
 pub mod image_out;
+pub mod lights;
 pub mod progress;
 pub mod shaders;
 pub mod viewer;

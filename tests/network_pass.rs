@@ -10,7 +10,7 @@ use rrf::gpu_frame::{FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
-use rrf_baker::scene::Scene;
+use rrf_baker::scene::{PlacedLight, Scene};
 use rrf_baker::trace::{Camera, Geometry, Radiance, World};
 use rrf_renderer::network_pass::Variant;
 use rrf_renderer::tonemap::tonemap;
@@ -19,12 +19,16 @@ use rrf_renderer::vk;
 /// One component of the CPU's radiance.
 type Pick = fn(&Radiance) -> Vec3;
 
-fn compare(scene_name: &str, view_name: &str, light: Vec3, width: u32, height: u32) {
+/// A light at `position` as bright as the glTF's.
+fn at(position: Vec3) -> Vec<PlacedLight> {
+    vec![PlacedLight { position, scale: Vec3::ONE }]
+}
+
+fn compare(scene_name: &str, view_name: &str, lights: &[PlacedLight], width: u32, height: u32) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene_name);
     let scene = Scene::load(&dir).unwrap();
     let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
     let view = scene.view(view_name).unwrap().clone();
-    let default_light = scene.moving_light.as_ref().unwrap().default_position;
 
     let ctx = gpu();
     let extent = vk::Extent2D { width, height };
@@ -32,14 +36,18 @@ fn compare(scene_name: &str, view_name: &str, light: Vec3, width: u32, height: u
         .iter()
         .map(|&variant| {
             // One frame serves every configuration: it starts at another size with the light
-            // where the glTF puts it, then is resized and the light moved.
+            // where the glTF puts it, then is resized and given the lights.
             let start = vk::Extent2D { width: width / 2 + 3, height: height / 2 + 1 };
             let mut frame = GpuFrame::new(&ctx, &scene, &model, variant, start, FrameOutput::Radiance).unwrap();
-            let mut settings =
-                FrameSettings { view: view.clone(), light: default_light, exposure_scale: 1.0, shown: Shown::Gi };
+            let mut settings = FrameSettings {
+                view: view.clone(),
+                lights: vec![scene.default_light()],
+                exposure_scale: 1.0,
+                shown: Shown::Gi,
+            };
             frame.render(&ctx, &settings).unwrap();
             frame.resize(&ctx, extent).unwrap();
-            settings.light = light;
+            settings.lights = lights.to_vec();
             let pixels = frame.render(&ctx, &settings).unwrap();
             frame.destroy(&ctx);
             (variant, pixels)
@@ -48,7 +56,7 @@ fn compare(scene_name: &str, view_name: &str, light: Vec3, width: u32, height: u
     finish_clean(ctx);
 
     let geometry = Geometry::new(&scene);
-    let world = World::new(&scene, &geometry, Some(light));
+    let world = World::with_lights(&scene, &geometry, lights);
     let cpu = predict_image(&world, &Camera::new(&view, width as f32 / height as f32), &model, width, height);
 
     for (variant, pixels) in &rendered {
@@ -90,23 +98,37 @@ fn check(what: &str, cpu: &[Radiance], gpu: &[f32], pick: Pick) {
 
 #[test]
 fn gpu_matches_cpu_inference_cornell_box() {
-    compare("cornell-box", "default", Vec3::new(0.2, 0.5, 0.35), 96, 96);
+    compare("cornell-box", "default", &at(Vec3::new(0.2, 0.5, 0.35)), 96, 96);
+}
+
+/// Three coloured copies of the ceiling light, one dimmed: the networks summed per light on
+/// the GPU against the CPU inference's sum, and each copy's own geometry drawn where it is
+/// with its scaled emission (the default view sees the ceiling).
+#[test]
+fn gpu_matches_cpu_inference_with_three_lights() {
+    let lights = [
+        PlacedLight { position: Vec3::new(0.2, 0.5, 0.35), scale: Vec3::new(1.0, 0.4, 0.2) },
+        PlacedLight { position: Vec3::new(0.38, 0.45, 0.2), scale: Vec3::new(0.2, 0.5, 1.0) },
+        PlacedLight { position: Vec3::new(0.3, 0.54, 0.4), scale: Vec3::splat(0.25) },
+    ];
+    compare("cornell-box", "default", &lights, 96, 96);
 }
 
 #[test]
 fn gpu_matches_cpu_inference_many_objects() {
-    compare("many-objects", "table", Vec3::new(0.8, 2.2, -0.5), 120, 80);
+    compare("many-objects", "table", &at(Vec3::new(0.8, 2.2, -0.5)), 120, 80);
 }
 
 /// Textured surfaces, whose networks' output the G-buffer's reflectance multiplies, a normal
 /// map, alpha-masked leaves and a textured emitter.
 #[test]
 fn gpu_matches_cpu_inference_gallery() {
-    compare("gallery", "plant", Vec3::new(-1.0, 2.5, -0.5), 120, 90);
+    compare("gallery", "plant", &at(Vec3::new(-1.0, 2.5, -0.5)), 120, 90);
 }
 
 /// The display frame (the walkthrough's: the network pass tonemaps and writes the display
-/// image itself) against the radiance frame tonemapped on the CPU, every component.
+/// image itself) against the radiance frame tonemapped on the CPU, every component, with two
+/// lights.
 #[test]
 fn display_frame_matches_the_tonemapped_radiance() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy-room");
@@ -120,7 +142,10 @@ fn display_frame_matches_the_tonemapped_radiance() {
         for shown in [Shown::Gi, Shown::Direct, Shown::Indirect] {
             let settings = FrameSettings {
                 view: scene.views[0].clone(),
-                light: scene.moving_light.as_ref().unwrap().default_position,
+                lights: vec![
+                    scene.default_light(),
+                    PlacedLight { position: Vec3::new(0.5, 2.6, -1.0), scale: Vec3::new(0.3, 0.6, 1.0) },
+                ],
                 exposure_scale: 1.5,
                 shown,
             };

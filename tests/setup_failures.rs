@@ -56,7 +56,7 @@ fn a_failed_resize_leaves_the_frame_usable_and_nothing_behind() {
     let mut frame = GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, EXTENT, FrameOutput::Radiance).unwrap();
     let settings = FrameSettings {
         view: scene.views[0].clone(),
-        light: scene.moving_light.as_ref().unwrap().default_position,
+        lights: vec![scene.default_light()],
         exposure_scale: 1.0,
         shown: Shown::Gi,
     };

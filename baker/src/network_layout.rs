@@ -6,6 +6,9 @@
 /// Network inputs: position, direction to the viewer, light position, normal (3 each) and
 /// roughness.
 pub const INPUTS: usize = 13;
+/// Where the light position's x, y, z sit among the inputs. The renderer sums the networks
+/// over several lights by re-evaluating only these three inputs' share of the first layer.
+pub const LIGHT_INPUT: usize = 6;
 /// Units of the first hidden layer (tanh).
 pub const HIDDEN1: usize = 20;
 /// Units of the second hidden layer (tanh).

@@ -126,16 +126,28 @@ fn half_to_f32(h: u16) -> f32 {
 }
 
 /// Per-frame constants of the pass: a column-major view-projection matrix (Vulkan clip space:
-/// y down, depth 0..1), the eye, and the moving light's offset from where the mesh has it,
-/// applied to the vertices of object `light_object - 1` (0: no object moves).
+/// y down, depth 0..1), the eye, and the object id + 1 of the moving light's own geometry
+/// (0: no object moves), which is drawn once per [`LightCopy`].
+///
+/// `light_offset` and `light_scale` are those of the copy being drawn (the pass sets them);
+/// 128 bytes in all, the push-constant size every device offers.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct GBufferConstants {
     pub view_projection: [[f32; 4]; 4],
     pub eye: [f32; 4],
     pub light_offset: [f32; 4],
+    pub light_scale: [f32; 4],
     pub light_object: u32,
     pub pad: [u32; 3],
+}
+
+/// One copy of the moving light's geometry: how far it is moved from where the mesh has it,
+/// and what its emission is multiplied by (rgb).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightCopy {
+    pub offset: [f32; 3],
+    pub scale: [f32; 3],
 }
 
 pub const SURFACE_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
@@ -515,6 +527,7 @@ impl GBufferPass {
         targets: &'a GBufferTargets,
         mesh: &'a GBufferMesh,
         constants: GBufferConstants,
+        lights: Vec<LightCopy>,
     ) -> Pass<'a> {
         let mut uses: Vec<Use> =
             targets.colors().iter().map(|i| Use::image(i, Access::COLOR_ATTACHMENT_WRITE)).collect();
@@ -522,11 +535,12 @@ impl GBufferPass {
         uses.push(Use::buffer(&mesh.buffer, Access::VERTEX_INDEX_READ));
         uses.push(Use::buffer(&mesh.materials, Access::FRAGMENT_READ));
         uses.push(Use::buffer(&mesh.texels, Access::FRAGMENT_READ));
-        Pass::new("gbuffer", uses, move |cmd| self.record(ctx, cmd, targets, mesh, &constants))
+        Pass::new("gbuffer", uses, move |cmd| self.record(ctx, cmd, targets, mesh, &constants, &lights))
     }
 
-    /// Records the pass: clears the targets and draws `mesh` seen through `camera`. The color
-    /// targets are in `GENERAL` layout before and after.
+    /// Records the pass: clears the targets and draws `mesh` seen through `camera`, the moving
+    /// light's geometry once per copy in `lights`. The color targets are in `GENERAL` layout
+    /// before and after.
     pub fn record(
         &self,
         ctx: &Context,
@@ -534,6 +548,7 @@ impl GBufferPass {
         targets: &GBufferTargets,
         mesh: &GBufferMesh,
         camera: &GBufferConstants,
+        lights: &[LightCopy],
     ) {
         let device = &ctx.device;
         let zero = vk::ClearValue { color: vk::ClearColorValue { uint32: [0; 4] } };
@@ -575,21 +590,36 @@ impl GBufferPass {
 
             device.cmd_set_viewport(cmd, 0, &[viewport]);
             device.cmd_set_scissor(cmd, 0, &[area]);
-            device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::VERTEX, 0, bytemuck::bytes_of(camera));
             if let Some(set) = &self.set {
                 device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[set.set], &[]);
             }
             device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.buffer.raw], &[0]);
             device.cmd_bind_index_buffer(cmd, mesh.buffer.raw, mesh.index_offset, vk::IndexType::UINT32);
-            // Objects whose bounds are outside the view cost no vertex work or triangle set-up.
+            // The scene, then each copy of the moving light with its own offset and scale.
+            let still = std::iter::once((*camera, false));
+            let copies = lights.iter().map(|l| {
+                let placed = GBufferConstants {
+                    light_offset: [l.offset[0], l.offset[1], l.offset[2], 0.0],
+                    light_scale: [l.scale[0], l.scale[1], l.scale[2], 0.0],
+                    ..*camera
+                };
+                (placed, true)
+            });
             let mut bound = None;
-            for draw in mesh.draws.iter().filter(|d| d.visible(camera)) {
-                if bound != Some(draw.textured) {
-                    let pipeline = self.pipelines[usize::from(draw.textured)];
-                    device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-                    bound = Some(draw.textured);
+            for (constants, moving) in still.chain(copies) {
+                let stage = vk::ShaderStageFlags::VERTEX;
+                device.cmd_push_constants(cmd, self.layout, stage, 0, bytemuck::bytes_of(&constants));
+                // Objects whose bounds are outside the view cost no vertex work or triangle
+                // set-up.
+                let draws = mesh.draws.iter().filter(|d| (d.object + 1 == constants.light_object) == moving);
+                for draw in draws.filter(|d| d.visible(&constants)) {
+                    if bound != Some(draw.textured) {
+                        let pipeline = self.pipelines[usize::from(draw.textured)];
+                        device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+                        bound = Some(draw.textured);
+                    }
+                    device.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0);
                 }
-                device.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0);
             }
             device.cmd_end_rendering(cmd);
         }
@@ -627,7 +657,14 @@ mod tests {
         for (i, column) in view_projection.iter_mut().enumerate() {
             column[i] = 1.0;
         }
-        GBufferConstants { view_projection, eye: [0.0; 4], light_offset, light_object, pad: [0; 3] }
+        GBufferConstants {
+            view_projection,
+            eye: [0.0; 4],
+            light_offset,
+            light_scale: [1.0; 4],
+            light_object,
+            pad: [0; 3],
+        }
     }
 
     #[test]

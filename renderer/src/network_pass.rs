@@ -140,34 +140,65 @@ fn specialization(id: usize, n: &ObjectNetworks, tiled: bool) -> Specialization 
     words
 }
 
-/// Camera and light, as every variant's shader reads them, and for a pass that writes a
+/// The most lights one frame sums (the size of the lights buffer).
+pub const MAX_LIGHTS: usize = 16;
+
+/// One light as the network shaders read it (`Light` in `network_inputs.glsl`): a copy of
+/// the moving light at `position` (xyz), whose networks' output is scaled by `scale` (rgb).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct NetworkLight {
+    pub position: [f32; 4],
+    pub scale: [f32; 4],
+}
+
+/// Camera and lights, as every variant's shader reads them, and for a pass that writes a
 /// display image, how to show it.
 #[derive(Clone, Copy, Debug)]
 pub struct NetworkConstants {
-    pub eye: [f32; 4],
-    pub light: [f32; 4],
+    eye: [f32; 4],
+    lights: [NetworkLight; MAX_LIGHTS],
+    light_count: u32,
     /// 2^EV.
-    pub exposure_scale: f32,
+    exposure_scale: f32,
     /// The component shown: 0 global, 1 direct, 2 indirect.
-    pub shown: u32,
+    shown: u32,
+}
+
+impl NetworkConstants {
+    /// The constants of a frame seen from `eye` and lit by `lights` (1 to [`MAX_LIGHTS`]);
+    /// `exposure_scale` (2^EV) and `shown` (0 global, 1 direct, 2 indirect) matter only to a
+    /// pass that writes a display image.
+    pub fn new(eye: [f32; 4], lights: &[NetworkLight], exposure_scale: f32, shown: u32) -> Result<Self> {
+        if lights.is_empty() || lights.len() > MAX_LIGHTS {
+            return Err(Error::Invalid(format!("{} lights; a frame has 1 to {MAX_LIGHTS}", lights.len())));
+        }
+        let mut all = [NetworkLight::default(); MAX_LIGHTS];
+        all[..lights.len()].copy_from_slice(lights);
+        Ok(NetworkConstants { eye, lights: all, light_count: lights.len() as u32, exposure_scale, shown })
+    }
+
+    fn lights(&self) -> &[NetworkLight] {
+        &self.lights[..self.light_count as usize]
+    }
 }
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct StoragePush {
     eye: [f32; 4],
-    light: [f32; 4],
+    light_count: u32,
+    pad: [u32; 3],
 }
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct SpecializedPush {
     eye: [f32; 4],
-    light: [f32; 4],
+    light_count: u32,
     tile_capacity: u32,
     exposure_scale: f32,
     shown: u32,
-    pad: u32,
 }
 
 #[repr(C)]
@@ -245,6 +276,8 @@ pub struct NetworkPass {
     extent: vk::Extent2D,
     /// Per material: rgb emitted radiance, roughness (what the G-buffer's material ids index).
     materials: Buffer,
+    /// The frame's lights ([`NetworkLight`]), written at the start of each frame.
+    lights: Buffer,
     /// The radiance images; `None` when the pass writes a display image instead.
     outputs: Option<NetworkOutputs>,
     kind: Kind,
@@ -301,6 +334,13 @@ impl NetworkPass {
         let bytes: &[u8] = if materials.is_empty() { &[0; 16] } else { bytemuck::cast_slice(materials) };
         let materials =
             ctx.guard(ctx.create_buffer_with_data("materials", bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?);
+        let lights = ctx.guard(ctx.create_buffer(
+            "network lights",
+            (MAX_LIGHTS * std::mem::size_of::<NetworkLight>()) as u64,
+            vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?);
+        let shared = Shared { materials: &materials, lights: &lights };
         let outputs = match display {
             Some(_) => None,
             None => Some(NetworkOutputs::new(ctx, gbuffer.extent)?),
@@ -309,7 +349,7 @@ impl NetworkPass {
         let written = Written::of(&outputs, display)?;
         let kind = match variant {
             Variant::Storage => match written {
-                Written::Radiance(o) => storage(ctx, shaders.storage, gbuffer, &materials, o, objects)?,
+                Written::Radiance(o) => storage(ctx, shaders.storage, gbuffer, shared, o, objects)?,
                 Written::Display(_) => {
                     return Err(Error::Invalid("the storage network variant cannot write a display image".into()))
                 }
@@ -318,13 +358,20 @@ impl NetworkPass {
                 ctx,
                 shaders,
                 gbuffer,
-                &materials,
+                shared,
                 written,
                 objects,
                 variant == Variant::Tiled,
             )?)),
         };
-        Ok(NetworkPass { variant, extent: gbuffer.extent, materials: materials.keep(), outputs: outputs.keep(), kind })
+        Ok(NetworkPass {
+            variant,
+            extent: gbuffer.extent,
+            materials: materials.keep(),
+            lights: lights.keep(),
+            outputs: outputs.keep(),
+            kind,
+        })
     }
 
     /// The radiance images, unless the pass writes a display image.
@@ -362,10 +409,9 @@ impl NetworkPass {
         std::mem::replace(&mut self.outputs, outputs.keep()).destroy(ctx);
         self.extent = extent;
         let written = Written::of(&self.outputs, display)?;
+        let shared = Shared { materials: &self.materials, lights: &self.lights };
         match &mut self.kind {
-            Kind::Storage { pass, weights } => {
-                pass.rebind(ctx, &network_bindings(gbuffer, &self.materials, weights, written))
-            }
+            Kind::Storage { pass, weights } => pass.rebind(ctx, &network_bindings(gbuffer, shared, weights, written)),
             Kind::Specialized(s) => {
                 if let Some((tiles, capacity)) = tiles {
                     ctx.destroy_buffer(std::mem::replace(&mut s.tiles, tiles));
@@ -373,7 +419,7 @@ impl NetworkPass {
                 }
                 let bindings = classify_bindings(gbuffer, &self.materials, &s.trained, &s.dispatch, &s.tiles, written);
                 s.classify.rebind(ctx, &bindings);
-                s.networks.rebind(ctx, &network_bindings(gbuffer, &self.materials, &s.tiles, written));
+                s.networks.rebind(ctx, &network_bindings(gbuffer, shared, &s.tiles, written));
             }
         }
         Ok(())
@@ -392,21 +438,27 @@ impl NetworkPass {
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let g = [&gbuffer.surface, &gbuffer.id, &gbuffer.shading];
         let materials = Use::buffer(&self.materials, Access::COMPUTE_READ);
+        let lights = Use::buffer(&self.lights, Access::COMPUTE_READ);
         let writes: Vec<Use> = Written::of(&self.outputs, display)?
             .images()
             .into_iter()
             .map(|image| Use::image(image, Access::COMPUTE_WRITE))
             .collect();
-        Ok(match &self.kind {
+        let upload = Pass::new("network lights", vec![Use::buffer(&self.lights, Access::TRANSFER_WRITE)], move |cmd| {
+            // SAFETY: recording outside a render pass; at most MAX_LIGHTS × 32 bytes, a multiple
+            // of 4 and under vkCmdUpdateBuffer's 64 KiB.
+            unsafe { ctx.device.cmd_update_buffer(cmd, self.lights.raw, 0, bytemuck::cast_slice(c.lights())) };
+        });
+        let mut passes = vec![upload];
+        match &self.kind {
             Kind::Storage { pass, weights } => {
                 let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
-                uses.push(materials);
-                uses.push(Use::buffer(weights, Access::COMPUTE_READ));
+                uses.extend([materials, lights, Use::buffer(weights, Access::COMPUTE_READ)]);
                 uses.extend(writes);
-                let push = StoragePush { eye: c.eye, light: c.light };
-                vec![Pass::new("network (storage buffer)", uses, move |cmd| {
+                let push = StoragePush { eye: c.eye, light_count: c.light_count, pad: [0; 3] };
+                passes.push(Pass::new("network (storage buffer)", uses, move |cmd| {
                     pass.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
-                })]
+                }));
             }
             Kind::Specialized(s) => {
                 let reset = Pass::new(
@@ -444,21 +496,20 @@ impl NetworkPass {
                     s.classify.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
                 });
                 let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
-                uses.push(materials);
-                uses.push(Use::buffer(&s.tiles, Access::COMPUTE_READ));
+                uses.extend([materials, lights, Use::buffer(&s.tiles, Access::COMPUTE_READ)]);
                 if s.tiled {
                     uses.push(Use::buffer(&s.dispatch, Access::INDIRECT_READ));
                 }
                 uses.extend(writes);
                 let networks =
-                    Pass::new("network (specialization constants)", uses, move |cmd| s.record(ctx, cmd, extent, c));
-                let mut passes = vec![classify, networks];
+                    Pass::new("network (specialization constants)", uses, move |cmd| s.record(ctx, cmd, extent, &c));
                 if !s.dispatch_reset.is_empty() {
-                    passes.insert(0, reset);
+                    passes.push(reset);
                 }
-                passes
+                passes.extend([classify, networks]);
             }
-        })
+        }
+        Ok(passes)
     }
 
     pub fn destroy(self, ctx: &Context) {
@@ -470,6 +521,7 @@ impl NetworkPass {
             Kind::Specialized(s) => Destroy::destroy(*s, ctx),
         }
         ctx.destroy_buffer(self.materials);
+        ctx.destroy_buffer(self.lights);
         self.outputs.destroy(ctx);
     }
 }
@@ -490,20 +542,28 @@ impl Destroy for Specialized {
     }
 }
 
+/// The buffers every variant's network shader reads besides the G-buffer.
+#[derive(Clone, Copy)]
+struct Shared<'a> {
+    materials: &'a Buffer,
+    lights: &'a Buffer,
+}
+
 /// The bindings `network_storage.comp` and `network_specialized_main.glsl` share: the
-/// G-buffer and the materials (`network_inputs.glsl`), the variant's buffer (weights or tile
-/// lists), then what the pass writes.
+/// G-buffer, the materials and the lights (`network_inputs.glsl`), the variant's buffer
+/// (weights or tile lists), then what the pass writes.
 fn network_bindings<'a>(
     gbuffer: &'a GBufferTargets,
-    materials: &'a Buffer,
+    shared: Shared<'a>,
     buffer: &'a Buffer,
     written: Written<'a>,
 ) -> Vec<Bind<'a>> {
     let mut binds = vec![
         Bind::StorageImage(&gbuffer.surface),
         Bind::StorageImage(&gbuffer.id),
-        Bind::StorageBuffer(materials),
+        Bind::StorageBuffer(shared.materials),
         Bind::StorageImage(&gbuffer.shading),
+        Bind::StorageBuffer(shared.lights),
         Bind::StorageBuffer(buffer),
     ];
     binds.extend(written.images().into_iter().map(Bind::StorageImage));
@@ -535,7 +595,7 @@ fn storage(
     ctx: &Context,
     spirv: &[u32],
     gbuffer: &GBufferTargets,
-    materials: &Buffer,
+    shared: Shared,
     outputs: &NetworkOutputs,
     objects: &[Option<ObjectNetworks>],
 ) -> Result<Kind> {
@@ -552,7 +612,7 @@ fn storage(
         bytemuck::cast_slice(&weights),
         vk::BufferUsageFlags::STORAGE_BUFFER,
     )?);
-    let bindings = network_bindings(gbuffer, materials, &weights, Written::Radiance(outputs));
+    let bindings = network_bindings(gbuffer, shared, &weights, Written::Radiance(outputs));
     let push = std::mem::size_of::<StoragePush>() as u32;
     let pass = ComputePass::new(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE))?;
     Ok(Kind::Storage { pass, weights: weights.keep() })
@@ -579,7 +639,7 @@ fn specialized(
     ctx: &Context,
     shaders: &NetworkShaders,
     gbuffer: &GBufferTargets,
-    materials: &Buffer,
+    shared: Shared,
     written: Written,
     objects: &[Option<ObjectNetworks>],
     tiled: bool,
@@ -620,7 +680,7 @@ fn specialized(
         ctx,
         "network tile classification",
         classify_spirv,
-        &classify_bindings(gbuffer, materials, &trained, &dispatch, &tiles, written),
+        &classify_bindings(gbuffer, shared.materials, &trained, &dispatch, &tiles, written),
         std::mem::size_of::<ClassifyPush>() as u32,
         (TILE, TILE),
     )?);
@@ -628,7 +688,7 @@ fn specialized(
         ctx,
         "network (specialization constants)",
         specialized_spirv,
-        &network_bindings(gbuffer, materials, &tiles, written),
+        &network_bindings(gbuffer, shared, &tiles, written),
         std::mem::size_of::<SpecializedPush>() as u32,
         (TILE, TILE),
         &specializations,
@@ -655,14 +715,13 @@ fn pad(words: &[u32]) -> &[u8] {
 
 impl Specialized {
     /// The per-object dispatches. Each writes only its own object's pixels of the outputs.
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, c: NetworkConstants) {
+    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, c: &NetworkConstants) {
         let push = SpecializedPush {
             eye: c.eye,
-            light: c.light,
+            light_count: c.light_count,
             tile_capacity: self.tile_capacity,
             exposure_scale: c.exposure_scale,
             shown: c.shown,
-            pad: 0,
         };
         for (index, &id) in self.objects.iter().enumerate() {
             let dispatch = if self.tiled {

@@ -9,8 +9,9 @@
 //                       colour r, g; y base colour b, emissive texture r; z emissive texture
 //                       g, b; and w roughness, metallic as 16-bit unorms
 //
-// The emissive texture multiplies the material's emission, in the materials buffer the
-// network passes bind; it is 0 on a face that does not emit.
+// The emissive texture (times the light copy's scale on the moving light) multiplies the
+// material's emission, in the materials buffer the network passes bind; it is 0 on a face
+// that does not emit.
 #ifndef RRF_GBUFFER_LAYOUT_GLSL
 #define RRF_GBUFFER_LAYOUT_GLSL
 

@@ -1,6 +1,7 @@
 // Radiance regression function on the GPU: INPUTS → HIDDEN1 tanh → HIDDEN2 tanh → 3, reading
 // the parameters from `weights` at `base`. Follows baker/src/network.rs (`Network::evaluate`,
-// `forward`) line for line; the shape and parameter offsets come from
+// `forward`), with the first layer split in two so that several lights share its per-pixel
+// part; the shape and parameter offsets come from
 // baker/src/network_layout.rs (through network_inputs.glsl).
 #ifndef RRF_NETWORK_GLSL
 #define RRF_NETWORK_GLSL
@@ -13,31 +14,45 @@ float normalize_input(float x, float lo, float hi) {
     return range > 1e-6 ? 2.0 * (x - lo) / range - 1.0 : 0.0;
 }
 
-// The network on normalised inputs `x`.
-vec3 forward(uint base, float x[INPUTS]) {
+// First layer, part 1: the bias plus the weighted inputs other than the light position
+// (normalised `x`), once per pixel; `forward_lit` adds the light's share once per light.
+void forward_surface(uint base, float x[INPUTS], out float s[HIDDEN1]) {
+    for (int j = 0; j < HIDDEN1; ++j) {
+        float sum = weights[base + B1 + j];
+        for (int i = 0; i < INPUTS; ++i) {
+            if (i < LIGHT_INPUT || i >= LIGHT_INPUT + 3) {
+                sum += weights[base + W1 + j * INPUTS + i] * x[i];
+            }
+        }
+        s[j] = sum;
+    }
+}
+
+// The network on first-layer sums `s` and the normalised light position `light`.
+vec3 forward_lit(uint base, float s[HIDDEN1], vec3 light) {
     float h1[HIDDEN1];
     for (int j = 0; j < HIDDEN1; ++j) {
-        float s = weights[base + B1 + j];
-        for (int i = 0; i < INPUTS; ++i) {
-            s += weights[base + W1 + j * INPUTS + i] * x[i];
+        float sum = s[j];
+        for (int i = 0; i < 3; ++i) {
+            sum += weights[base + W1 + j * INPUTS + LIGHT_INPUT + i] * light[i];
         }
-        h1[j] = network_tanh(s);
+        h1[j] = network_tanh(sum);
     }
     float h2[HIDDEN2];
     for (int k = 0; k < HIDDEN2; ++k) {
-        float s = weights[base + B2 + k];
+        float sum = weights[base + B2 + k];
         for (int j = 0; j < HIDDEN1; ++j) {
-            s += weights[base + W2 + k * HIDDEN1 + j] * h1[j];
+            sum += weights[base + W2 + k * HIDDEN1 + j] * h1[j];
         }
-        h2[k] = network_tanh(s);
+        h2[k] = network_tanh(sum);
     }
     vec3 y;
     for (int c = 0; c < 3; ++c) {
-        float s = weights[base + B3 + c];
+        float sum = weights[base + B3 + c];
         for (int k = 0; k < HIDDEN2; ++k) {
-            s += weights[base + W3 + c * HIDDEN2 + k] * h2[k];
+            sum += weights[base + W3 + c * HIDDEN2 + k] * h2[k];
         }
-        y[c] = s;
+        y[c] = sum;
     }
     return y;
 }

@@ -1,6 +1,6 @@
 // What every network variant shares: the network's shape, its activation, the 13 raw inputs
-// of a pixel (in the order of `raw_inputs` in baker/src/network.rs), and the G-buffer and
-// materials bindings they are read from (bindings 0-3 of every network shader).
+// of a pixel (in the order of `raw_inputs` in baker/src/network.rs), and the G-buffer,
+// materials and lights bindings they are read from (bindings 0-4 of every network shader).
 #ifndef RRF_NETWORK_INPUTS_GLSL
 #define RRF_NETWORK_INPUTS_GLSL
 
@@ -15,6 +15,14 @@ layout(binding = 1, r32ui) uniform readonly uimage2D gbuffer_id;
 // KHR_materials_specular factor.
 layout(std430, binding = 2) readonly buffer Materials { vec4 materials[]; };
 layout(binding = 3, rgba32ui) uniform readonly uimage2D gbuffer_shading;
+// The frame's lights, as many as the push constants' `light_count`: copies of the moving
+// light, each at `position.xyz`, each scaling the networks' output by `scale.rgb`. Light
+// transport is linear in the emission, so the pixel's radiance is the sum over the copies.
+struct Light {
+    vec4 position;
+    vec4 scale;
+};
+layout(std430, binding = 4) readonly buffer Lights { Light lights[]; };
 
 // The material's textured values at `pixel`: read once per pixel and passed to the functions
 // below (lavapipe gathers every image read lane by lane).
@@ -48,15 +56,16 @@ float network_tanh(float x) {
     return clamp(c * p / q, -1.0, 1.0);
 }
 
-// Position, direction towards the eye, light position, shading normal, roughness, of the
-// surface at `pixel` with shading `s`.
-float[INPUTS] raw_inputs(ivec2 pixel, Shading s, vec3 eye, vec3 light) {
+// Position, direction towards the eye, shading normal, roughness, of the surface at `pixel`
+// with shading `s`; the light position's three inputs (from LIGHT_INPUT) are left 0, for the
+// loop over the lights to fill in.
+float[INPUTS] raw_inputs(ivec2 pixel, Shading s, vec3 eye) {
     uvec4 surface = imageLoad(gbuffer_surface, pixel);
     vec3 p = uintBitsToFloat(surface.xyz);
     vec3 n = decode_normal(surface.w);
     vec3 v = normalize(eye - p);
     float roughness = s.roughness;
-    return float[INPUTS](p.x, p.y, p.z, v.x, v.y, v.z, light.x, light.y, light.z, n.x, n.y, n.z, roughness);
+    return float[INPUTS](p.x, p.y, p.z, v.x, v.y, v.z, 0.0, 0.0, 0.0, n.x, n.y, n.z, roughness);
 }
 
 #endif

@@ -17,19 +17,19 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const uint OBJECT = 1u;
 layout(constant_id = 1) const bool TILED = true;
 
-// Bindings 0-3 (G-buffer, materials): network_inputs.glsl.
-layout(binding = 4) readonly buffer Tiles { uint tiles[]; };
+// Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
+layout(binding = 5) readonly buffer Tiles { uint tiles[]; };
 #ifdef DISPLAY
-layout(binding = 5, rgba8) uniform writeonly image2D display;
+layout(binding = 6, rgba8) uniform writeonly image2D display;
 #else
-layout(binding = 5, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 6, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 7, rgba32f) uniform writeonly image2D out_gi;
+layout(binding = 6, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = 7, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = 8, rgba32f) uniform writeonly image2D out_gi;
 #endif
 
 layout(push_constant) uniform Constants {
     vec4 eye;
-    vec4 light;
+    uint light_count;
     uint tile_capacity;
     // DISPLAY only: 2^EV, and the component shown (0 global, 1 direct, 2 indirect).
     float exposure_scale;
@@ -57,10 +57,21 @@ void main() {
         return;
     }
     Shading shading = pixel_shading(pixel);
-    float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz, constants.light.xyz);
+    float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
+    float direct_sums[HIDDEN1];
+    float indirect_sums[HIDDEN1];
+    direct_surface(x, direct_sums);
+    indirect_surface(x, indirect_sums);
+    vec3 direct = vec3(0.0);
+    vec3 indirect = vec3(0.0);
+    for (uint l = 0u; l < constants.light_count; ++l) {
+        vec3 light = lights[l].position.xyz;
+        direct += direct_lit(direct_sums, light) * lights[l].scale.rgb;
+        indirect += indirect_lit(indirect_sums, light) * lights[l].scale.rgb;
+    }
     vec3 reflectance = surface_reflectance(id, shading);
-    vec3 direct = direct_network(x) * reflectance;
-    vec3 indirect = indirect_network(x) * reflectance;
+    direct *= reflectance;
+    indirect *= reflectance;
 #ifdef DISPLAY
     vec3 shown = constants.shown == 1u ? direct
                : constants.shown == 2u ? indirect

@@ -7,7 +7,7 @@ use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use rrf_baker::model::Model;
 use rrf_baker::network::Component;
-use rrf_baker::scene::{Scene, View};
+use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_renderer::frames::{FrameLoop, FRAMES_IN_FLIGHT};
 use rrf_renderer::{vk, Context, ContextOptions, Validation};
 use serde_json::json;
@@ -19,8 +19,12 @@ use crate::gpu_frame::{FrameOutput, FrameSettings, GpuFrame, Shown, TIMESTAMPS};
 /// Frames run before timing starts.
 const WARM_UP: usize = 2;
 
-/// Multiply-adds of one 13 → 20 → 10 → 3 network: 13·20 + 20·10 + 10·3.
-const MULTIPLY_ADDS: f64 = 490.0;
+/// Multiply-adds of one 13 → 20 → 10 → 3 network per pixel lit by `lights` lights: the first
+/// layer's 10 inputs other than the light once (10·20), then per light its 3 light inputs and
+/// the rest (3·20 + 20·10 + 10·3); 490 for one light.
+fn multiply_adds(lights: usize) -> f64 {
+    200.0 + 290.0 * lights as f64
+}
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OutputArg {
@@ -77,6 +81,10 @@ pub struct BenchArgs {
     /// (the walkthrough's frame), `both` times each.
     #[arg(long, value_enum, default_value_t = OutputArg::Both)]
     pub output: OutputArg,
+    /// Numbers of lights to time, e.g. 1,2,4: copies of the moving light spread through its
+    /// box (each 1 to 16). With two or more, the cost of each extra light is printed.
+    #[arg(long, default_value = "1", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=16))]
+    pub lights: Vec<u32>,
     /// The device's fp32 peak in GFLOP/s, to report the fraction the network pass reaches.
     #[arg(long)]
     pub peak_gflops: Option<f64>,
@@ -99,13 +107,25 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let Some(period_ns) = ctx.info.limits.timestamp_period_ns else {
         bail!("{} cannot write timestamps on its queue", ctx.info.name);
     };
+    let lights = args
+        .lights
+        .iter()
+        .map(|&n| Ok((n, crate::lights::spread_lights(&scene, n as usize)?)))
+        .collect::<Result<Vec<_>>>()?;
     let bench = Bench { ctx: &ctx, period_ns: f64::from(period_ns), scene: &scene, model: &model, args };
     let runs = args.variant.0.iter().flat_map(|&v| args.output.outputs().into_iter().map(move |o| (v, o)));
     let rows: Result<Vec<_>> = runs
         .map(|(variant, output)| {
-            let row = bench.variant(variant, output, &view, width, height)?;
-            print_row(&row, args.json);
-            Ok(row)
+            let rows = lights
+                .iter()
+                .map(|(_, lights)| {
+                    let row = bench.variant(variant, output, &view, lights, width, height)?;
+                    print_row(&row, args.json);
+                    Ok(row)
+                })
+                .collect::<Result<Vec<_>>>()?;
+            print_light_cost(&rows, args.json);
+            Ok(rows)
         })
         .collect();
     let report = ctx.finish();
@@ -131,15 +151,16 @@ impl Bench<'_> {
         variant: VariantArg,
         output: FrameOutput,
         view: &View,
+        lights: &[PlacedLight],
         width: u32,
         height: u32,
     ) -> Result<serde_json::Value> {
         let (ctx, scene, model, args) = (self.ctx, self.scene, self.model, self.args);
-        let light = scene.moving_light.as_ref().map(|l| l.default_position).unwrap_or_default();
         let setup = Instant::now();
         let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, output)?;
         let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
-        let settings = FrameSettings { view: view.clone(), light, exposure_scale: 1.0, shown: Shown::Gi };
+        let settings =
+            FrameSettings { view: view.clone(), lights: lights.to_vec(), exposure_scale: 1.0, shown: Shown::Gi };
         let bytes_per_pixel = frame.bytes_per_pixel(ctx, &settings);
         let timed = self.time_frames(&frame, &settings);
         let objects = timed.as_ref().ok().map(|_| frame.read_objects(ctx));
@@ -154,7 +175,7 @@ impl Bench<'_> {
         let evaluations = 2 * objects.iter().filter(|&&id| id > 0 && trained[id as usize - 1]).count();
         let network_ms = median(network);
         let per_s = evaluations as f64 / (network_ms * 1e-3);
-        let gflops = per_s * 2.0 * MULTIPLY_ADDS * 1e-9;
+        let gflops = per_s * 2.0 * multiply_adds(lights.len()) * 1e-9;
         Ok(json!({
             "device": ctx.info.name,
             "variant": variant.0.name(),
@@ -165,6 +186,7 @@ impl Bench<'_> {
             "scene": scene.name,
             "width": width,
             "height": height,
+            "lights": lights.len(),
             "frames": args.frames,
             "setup_ms": setup_ms,
             "gbuffer_ms": median(gbuffer),
@@ -221,12 +243,14 @@ fn print_row(row: &serde_json::Value, json: bool) {
     let f = |key: &str| row[key].as_f64().unwrap_or_default();
     let s = |key: &str| row[key].as_str().unwrap_or_default().to_string();
     println!(
-        "{} {} ({} frame) on {}, {}x{}, median of {} frames (pipelines built in {:.0} ms):\n  \
+        "{} {} ({} frame, {} light{}) on {}, {}x{}, median of {} frames (pipelines built in {:.0} ms):\n  \
          G-buffer {:.2} ms, network {:.2} ms, tonemap {:.2} ms; frame {:.2} ms (CPU, start to start, {} frames in flight)\n  \
          {:.1} M network-pixels/s ({:.1} GFLOP/s{}); {} image bytes per pixel",
         s("scene"),
         s("variant"),
         s("output"),
+        row["lights"],
+        if row["lights"].as_u64() == Some(1) { "" } else { "s" },
         s("device"),
         row["width"],
         row["height"],
@@ -242,4 +266,43 @@ fn print_row(row: &serde_json::Value, json: bool) {
         row["peak_fraction"].as_f64().map(|p| format!(", {:.1}% of peak", 100.0 * p)).unwrap_or_default(),
         row["bytes_per_pixel"],
     );
+}
+
+/// The network pass's cost of each light beyond the first, from the rows of one variant and
+/// output at different light counts: the slope between the fewest and the most lights.
+fn print_light_cost(rows: &[serde_json::Value], json: bool) {
+    let point = |row: &serde_json::Value| (row["lights"].as_f64().unwrap_or(1.0), row["network_ms"].as_f64());
+    let (Some(first), Some(last)) =
+        (rows.iter().min_by_key(|r| r["lights"].as_u64()), rows.iter().max_by_key(|r| r["lights"].as_u64()))
+    else {
+        return;
+    };
+    let ((n0, Some(t0)), (n1, Some(t1))) = (point(first), point(last)) else { return };
+    if n1 <= n0 {
+        return;
+    }
+    let per_light = (t1 - t0) / (n1 - n0);
+    if json {
+        println!(
+            "{}",
+            json!({
+                "variant": first["variant"],
+                "output": first["output"],
+                "lights_from": n0,
+                "lights_to": n1,
+                "network_ms_per_extra_light": per_light,
+            })
+        );
+    } else {
+        println!(
+            "  {} ({} frame): network pass {:+.3} ms per light beyond the first ({} → {} lights: {:.2} → {:.2} ms)",
+            first["variant"].as_str().unwrap_or_default(),
+            first["output"].as_str().unwrap_or_default(),
+            per_light,
+            n0,
+            n1,
+            t0,
+            t1
+        );
+    }
 }

@@ -8,7 +8,7 @@ use clap::Args;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
-use rrf_baker::scene::Scene;
+use rrf_baker::scene::{PlacedLight, Scene};
 use rrf_baker::trace::render::RenderSettings;
 use rrf_baker::trace::sampling::mix64;
 use rrf_baker::trace::{Camera, Geometry, TraceSettings, World};
@@ -295,8 +295,12 @@ fn predict(
         }
         Predictor::Gpu(gpu) => {
             let (ctx, frame) = &**gpu;
-            let settings =
-                FrameSettings { view: config.view.clone(), light: config.light, exposure_scale: 1.0, shown: Shown::Gi };
+            let settings = FrameSettings {
+                view: config.view.clone(),
+                lights: vec![PlacedLight { position: config.light, scale: Vec3::ONE }],
+                exposure_scale: 1.0,
+                shown: Shown::Gi,
+            };
             let pixels = frame.render(ctx, &settings)?;
             Ok(Predicted { direct: rgb(&pixels.direct), indirect: rgb(&pixels.indirect), gi: rgb(&pixels.gi) })
         }

@@ -49,9 +49,9 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         eprintln!("warning: {warning}");
     }
     let view = args.view.resolve_view(&scene)?;
-    let light = args.view.light_position(&scene)?;
+    let lights = args.view.lights(&scene)?;
     let geometry = Geometry::new(&scene);
-    let world = World::new(&scene, &geometry, light);
+    let world = World::with_lights(&scene, &geometry, &lights);
     let camera = Camera::new(&view, width as f32 / height as f32);
     let settings = RenderSettings {
         width,

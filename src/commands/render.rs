@@ -8,7 +8,7 @@ use clap::Args;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
-use rrf_baker::scene::{Scene, View};
+use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_baker::trace::{Camera, Geometry, World};
 use rrf_renderer::{vk, Context, ContextOptions};
 
@@ -45,16 +45,16 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let scene = Scene::load(&args.view.scene)?;
     let model = model_to_render(&scene, args.model.as_deref())?;
     let view = args.view.resolve_view(&scene)?;
-    let light = args.view.light_position(&scene)?;
+    let lights = args.view.lights(&scene)?;
     let start = Instant::now();
     let (pixels, how) = if args.cpu {
         let geometry = Geometry::new(&scene);
-        let world = World::new(&scene, &geometry, light);
+        let world = World::with_lights(&scene, &geometry, &lights);
         let camera = Camera::new(&view, width as f32 / height as f32);
         let image = predict_image(&world, &camera, &model, width, height);
         (image.component(|r| args.component.pick(r)), "CPU inference".to_string())
     } else {
-        gpu_render(&scene, &model, args.variant, &view, light, (width, height), args.component)?
+        gpu_render(&scene, &model, args.variant, &view, lights, (width, height), args.component)?
     };
     let seconds = start.elapsed().as_secs_f64();
     write_image(&args.output, width, height, &pixels, args.view.exposure)?;
@@ -68,16 +68,14 @@ fn gpu_render(
     model: &Model,
     variant: VariantArg,
     view: &View,
-    light: Option<Vec3>,
+    lights: Vec<PlacedLight>,
     (width, height): (u32, u32),
     component: Component,
 ) -> Result<(Vec<Vec3>, String)> {
     let ctx = Context::new(&ContextOptions::from_env())?;
-    let default_light = scene.moving_light.as_ref().map_or(Vec3::ZERO, |l| l.default_position);
-    let light = light.unwrap_or(default_light);
     let extent = vk::Extent2D { width, height };
     let frame = GpuFrame::new(&ctx, scene, model, variant.0, extent, FrameOutput::Radiance)?;
-    let settings = FrameSettings { view: view.clone(), light, exposure_scale: 1.0, shown: Shown::Gi };
+    let settings = FrameSettings { view: view.clone(), lights, exposure_scale: 1.0, shown: Shown::Gi };
     let rendered = frame.render(&ctx, &settings);
     frame.destroy(&ctx);
     let device = format!("{}, {} network pass", ctx.info.name, variant.0.name());

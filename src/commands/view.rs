@@ -9,7 +9,7 @@ use rrf_renderer::{swapchain, vk, Context, ContextOptions};
 
 use super::bake::model_to_render;
 use super::variant::VariantArg;
-use super::view_args::{named_view, parse_size, parse_vec3};
+use super::view_args::{named_view, parse_size};
 use crate::viewer::renderer::Renderer;
 use crate::viewer::script::Script;
 use crate::viewer::state::ViewerState;
@@ -45,9 +45,8 @@ pub struct ViewArgs {
     /// A named view to start from (see `rrf info SCENE`); default: the glTF camera.
     #[arg(long)]
     pub view: Option<String>,
-    /// Where the moving light starts, x,y,z in metres; default: where the glTF puts it.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    pub light: Option<String>,
+    #[arg(long, help = crate::lights::LIGHT_HELP, value_name = "POSITION[:color=R,G,B][:intensity=K]", allow_hyphen_values = true)]
+    pub light: Vec<String>,
     /// Window size (or frame size when headless) in pixels, each side 1 to 16384.
     #[arg(long, default_value = "960x540", value_name = "WxH")]
     pub size: String,
@@ -86,14 +85,20 @@ const CONTROLS: &str = "\
 Controls (H shows them in the window):
   W A S D  move           Q E  down, up         Shift  faster      wheel  speed
   right mouse button held: look around
-  arrows, Page Up/Down: move the light, kept inside the box the model was trained for
+  arrows, Page Up/Down: move the selected light, kept inside the box the model was trained for
+  L: add a light where the selected one is   Tab: select the next light   Delete: remove it
+  C: the selected light's colour (white, warm, cool, red, green, blue)   - =: dim, brighten it
   1 2 3: global, direct only, indirect only     [ ]: exposure
   P: screenshot (the path is printed)   R: reset view and light   O: overlay   H: help   Esc: quit
 
 Script format (--script): one event per line, TIME COMMAND ARGUMENTS, TIME in seconds of script
 time, which advances by 1/60 s per frame whatever the frame rate; # starts a comment.
   camera X,Y,Z X,Y,Z [over S]    eye and target; with `over`, move there in S seconds
-  light X,Y,Z [over S]           the moving light (kept inside its trained box)
+  light X,Y,Z [over S]           the selected light (kept inside its trained box)
+  add-light X,Y,Z[:color=R,G,B][:intensity=K]   add a light and select it
+  select-light N                 select light N (from 1)
+  remove-light                   remove the selected light (not the last)
+  light-color R,G,B [intensity K]   the selected light's colour (each 0 to 1) and intensity
   component gi|direct|indirect   which light is shown
   exposure EV                    exposure in stops
   resize WxH                     window (or headless frame) size in pixels
@@ -117,12 +122,8 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
     let model = model_to_render(&scene, args.model.as_deref())?;
     let view = named_view(&scene, args.view.as_deref())?;
-    let default_light = scene.moving_light.as_ref().map_or(Default::default(), |l| l.default_position);
-    let light = match &args.light {
-        Some(text) => parse_vec3(text, "--light")?,
-        None => default_light,
-    };
-    let mut state = ViewerState::new(&scene, view, light);
+    let lights = crate::lights::lights_from_args(&scene, &args.light)?;
+    let mut state = ViewerState::new(&scene, view, lights);
     state.overlay = !args.no_overlay;
     if let Some(dir) = &args.record {
         std::fs::create_dir_all(dir).with_context(|| format!("--record: cannot create {}", dir.display()))?;

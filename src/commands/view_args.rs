@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use rrf_baker::glam::Vec3;
-use rrf_baker::scene::{Scene, View};
+use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_baker::trace::Radiance;
 
 #[derive(Args, Clone, Debug)]
@@ -19,9 +19,8 @@ pub struct ViewArgs {
     /// field of view is the default view's.
     #[arg(long, value_name = "EYE:TARGET", allow_hyphen_values = true)]
     pub camera: Option<String>,
-    /// Position of the scene's moving light, x,y,z in metres; default: where the glTF puts it.
-    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
-    pub light: Option<String>,
+    #[arg(long, help = crate::lights::LIGHT_HELP, value_name = "POSITION[:color=R,G,B][:intensity=K]", allow_hyphen_values = true)]
+    pub light: Vec<String>,
     /// Image size in pixels, each side 1 to 16384.
     #[arg(long, default_value = "256x256", value_name = "WxH")]
     pub size: String,
@@ -123,19 +122,8 @@ impl ViewArgs {
         Ok(View { name: "camera".into(), eye, target, up: Vec3::Y, fov_y: default.fov_y })
     }
 
-    /// The moving light's position: `--light`, or `None` for the glTF's.
-    pub fn light_position(&self, scene: &Scene) -> Result<Option<Vec3>> {
-        let Some(text) = &self.light else { return Ok(None) };
-        let p = parse_vec3(text, "--light")?;
-        match &scene.moving_light {
-            None => bail!("--light: scene {} has no moving light (no [light] in its sidecar)", scene.name),
-            Some(light) if !light.bounds.contains(p) => eprintln!(
-                "warning: --light {text} is outside the light's box {:?} .. {:?}; the networks were not trained there",
-                light.bounds.min.to_array(),
-                light.bounds.max.to_array()
-            ),
-            Some(_) => {}
-        }
-        Ok(Some(p))
+    /// The lights: `--light`s, or the glTF's light.
+    pub fn lights(&self, scene: &Scene) -> Result<Vec<PlacedLight>> {
+        crate::lights::lights_from_args(scene, &self.light)
     }
 }

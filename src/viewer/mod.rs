@@ -10,7 +10,7 @@ use std::collections::HashSet;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{Context as _, Result};
 
 use crate::frame_stats::Stats;
 use renderer::{Presenter, Renderer};
@@ -116,7 +116,9 @@ impl Session {
                     Action::Resize(w, h) => requests.resize = Some((*w, *h)),
                     Action::Screenshot(path) => screenshots.push(path.clone()),
                     Action::Quit => requests.quit = true,
-                    action => self.state.apply(action, t),
+                    action => {
+                        self.state.apply(action, t).with_context(|| format!("script event at {} s", event.time))?
+                    }
                 }
             }
         }

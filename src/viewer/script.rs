@@ -7,7 +7,11 @@
 //! | command | effect |
 //! |---|---|
 //! | `camera X,Y,Z X,Y,Z [over S]` | eye and target; with `over`, moves there linearly in S seconds |
-//! | `light X,Y,Z [over S]` | the moving light's position (kept inside its trained box) |
+//! | `light X,Y,Z [over S]` | the selected light's position (kept inside its trained box) |
+//! | `add-light X,Y,Z[:color=R,G,B][:intensity=K]` | adds a light (as `--light` says) and selects it |
+//! | `select-light N` | selects light N, from 1 |
+//! | `remove-light` | removes the selected light (not the last) |
+//! | `light-color R,G,B [intensity K]` | the selected light's colour (0 to 1) and intensity |
 //! | `component gi\|direct\|indirect` | which light is shown |
 //! | `exposure EV` | exposure in stops |
 //! | `resize WxH` | the frame (and window) size in pixels |
@@ -19,17 +23,32 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail, Context, Result};
 use rrf_baker::glam::Vec3;
+use rrf_baker::scene::PlacedLight;
 
 use crate::commands::view_args::{parse_exposure, parse_size, parse_vec3};
 use crate::gpu_frame::Shown;
+use crate::lights::parse_light;
 
 /// Script time per frame.
 pub const FRAME_SECONDS: f64 = 1.0 / 60.0;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Action {
-    Camera { eye: Vec3, target: Vec3, over: f64 },
-    Light { position: Vec3, over: f64 },
+    Camera {
+        eye: Vec3,
+        target: Vec3,
+        over: f64,
+    },
+    Light {
+        position: Vec3,
+        over: f64,
+    },
+    AddLight(PlacedLight),
+    /// From 1.
+    SelectLight(usize),
+    RemoveLight,
+    /// Colour × intensity.
+    LightScale(Vec3),
     Component(Shown),
     Exposure(f32),
     Resize(u32, u32),
@@ -85,6 +104,22 @@ impl Script {
     }
 }
 
+/// The script's commands.
+const COMMANDS: [&str; 12] = [
+    "camera",
+    "light",
+    "add-light",
+    "select-light",
+    "remove-light",
+    "light-color",
+    "component",
+    "exposure",
+    "resize",
+    "screenshot",
+    "overlay",
+    "quit",
+];
+
 fn parse_line(line: &str) -> Result<Event> {
     let words: Vec<&str> = line.split_whitespace().collect();
     let [time, command, args @ ..] = words.as_slice() else { bail!("expected TIME COMMAND [ARGUMENTS]") };
@@ -115,6 +150,27 @@ fn parse_line(line: &str) -> Result<Event> {
         ("light", [position, rest @ ..]) => {
             Action::Light { position: parse_vec3(position, "light")?, over: over(rest)? }
         }
+        ("add-light", [spec]) => {
+            let light = parse_light(spec, Vec3::NAN)?;
+            if light.position.is_nan() {
+                bail!("add-light: give the position as x,y,z");
+            }
+            Action::AddLight(light)
+        }
+        ("select-light", [n]) => match n.parse::<usize>() {
+            Ok(n) if n >= 1 => Action::SelectLight(n),
+            _ => bail!("select-light {n:?}: expected a light number from 1"),
+        },
+        ("remove-light", []) => Action::RemoveLight,
+        ("light-color", [color, rest @ ..]) => {
+            let mut spec = format!("0,0,0:color={color}");
+            match rest {
+                [] => {}
+                ["intensity", k] => spec += &format!(":intensity={k}"),
+                _ => bail!("light-color: unexpected {:?}; expected nothing or `intensity K`", rest.join(" ")),
+            }
+            Action::LightScale(parse_light(&spec, Vec3::ZERO)?.scale)
+        }
         ("component", [name]) => Action::Component(match *name {
             "gi" => Shown::Gi,
             "direct" => Shown::Direct,
@@ -135,12 +191,8 @@ fn parse_line(line: &str) -> Result<Event> {
         ("overlay", ["on"]) => Action::Overlay(true),
         ("overlay", ["off"]) => Action::Overlay(false),
         ("quit", []) => Action::Quit,
-        (c @ ("camera" | "light" | "component" | "exposure" | "resize" | "screenshot" | "overlay" | "quit"), _) => {
-            bail!("wrong arguments for {c}; see `rrf view --help`")
-        }
-        (c, _) => bail!(
-            "unknown command {c:?}; expected camera, light, component, exposure, resize, screenshot, overlay or quit"
-        ),
+        (c, _) if COMMANDS.contains(&c) => bail!("wrong arguments for {c}; see `rrf view --help`"),
+        (c, _) => bail!("unknown command {c:?}; expected {}", COMMANDS.join(", ")),
     };
     Ok(Event { time, action })
 }

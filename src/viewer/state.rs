@@ -1,14 +1,17 @@
 //! What the viewer shows and how input and scripts change it, apart from any window: the fly
-//! camera, the light inside its trained box, the component, the exposure, and the overlay text.
+//! camera, the lights inside their trained box (added, selected, moved, recoloured, dimmed and
+//! removed), the component, the exposure, and the overlay text.
 
+use anyhow::{bail, Result};
 use rrf_baker::glam::Vec3;
-use rrf_baker::scene::{Aabb, Scene, View};
+use rrf_baker::scene::{Aabb, PlacedLight, Scene, View};
 use rrf_renderer::overlay::{Colour, TextGrid};
 
 use super::script::Action;
 use crate::commands::view_args::MAX_EXPOSURE;
 use crate::frame_stats::Stats;
 use crate::gpu_frame::{FrameSettings, Shown, TIMED_PASSES};
+use crate::lights::{fixed_lights, MAX_INTENSITY, MAX_LIGHTS};
 
 /// Keys that act for as long as they are held.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -46,16 +49,22 @@ impl Tween {
 
 pub struct ViewerState {
     pub scene_name: String,
-    /// The view the viewer starts from and `R` returns to.
+    /// The view and lights the viewer starts from and `R` returns to.
     home: View,
-    home_light: Vec3,
+    home_lights: Vec<PlacedLight>,
     pub eye: Vec3,
     yaw: f32,
     pitch: f32,
     pub fov_y: f32,
     /// Camera speed in metres per second.
     pub speed: f32,
-    pub light: Vec3,
+    /// Copies of the moving light, at least one; the arrows move the selected one.
+    pub lights: Vec<PlacedLight>,
+    pub selected: usize,
+    /// Why lights cannot be added, recoloured or dimmed in this scene, if they cannot.
+    fixed_lights: Option<String>,
+    /// What the last light edit from a key said (a refusal), for the overlay.
+    pub light_note: Option<String>,
     light_box: Option<Aabb>,
     camera_box: Option<Aabb>,
     /// Whether the last light move was stopped by the edge of its box.
@@ -74,7 +83,9 @@ fn yaw_pitch(forward: Vec3) -> (f32, f32) {
 }
 
 impl ViewerState {
-    pub fn new(scene: &Scene, view: View, light: Vec3) -> Self {
+    /// The viewer of `scene` from `view`, lit by `lights` (checked with
+    /// `lights::check_lights`).
+    pub fn new(scene: &Scene, view: View, lights: Vec<PlacedLight>) -> Self {
         let (yaw, pitch) = yaw_pitch(view.target - view.eye);
         let bounds = scene.bounds();
         let light_box = scene.moving_light.as_ref().map(|l| l.bounds);
@@ -85,7 +96,10 @@ impl ViewerState {
             pitch,
             fov_y: view.fov_y,
             speed: (bounds.max - bounds.min).length().max(1e-3) * 0.25,
-            light,
+            lights: lights.clone(),
+            selected: 0,
+            fixed_lights: fixed_lights(scene),
+            light_note: None,
             light_box,
             camera_box: scene.camera_box,
             light_at_edge: false,
@@ -96,9 +110,9 @@ impl ViewerState {
             camera_tween: None,
             light_tween: None,
             home: view,
-            home_light: light,
+            home_lights: lights,
         };
-        state.set_light(light);
+        state.reset();
         state
     }
 
@@ -111,7 +125,12 @@ impl ViewerState {
     }
 
     pub fn settings(&self) -> FrameSettings {
-        FrameSettings { view: self.view(), light: self.light, exposure_scale: self.exposure.exp2(), shown: self.shown }
+        FrameSettings {
+            view: self.view(),
+            lights: self.lights.clone(),
+            exposure_scale: self.exposure.exp2(),
+            shown: self.shown,
+        }
     }
 
     fn set_camera(&mut self, eye: Vec3, target: Vec3) {
@@ -119,17 +138,88 @@ impl ViewerState {
         (self.yaw, self.pitch) = yaw_pitch(target - eye);
     }
 
-    /// Moves the light to `p`, or as near as its trained box allows.
+    /// The selected light.
+    pub fn light(&self) -> &PlacedLight {
+        &self.lights[self.selected]
+    }
+
+    /// Moves the selected light to `p`, or as near as its trained box allows.
     fn set_light(&mut self, p: Vec3) {
+        let light = &mut self.lights[self.selected];
         match &self.light_box {
             Some(b) => {
                 let clamped = p.clamp(b.min, b.max);
                 self.light_at_edge =
                     clamped.distance(p) > 1e-6 || clamped.cmpeq(b.min).any() || clamped.cmpeq(b.max).any();
-                self.light = clamped;
+                light.position = clamped;
             }
-            None => self.light = p,
+            None => light.position = p,
         }
+    }
+
+    /// Adds `light` and selects it.
+    pub fn add_light(&mut self, light: PlacedLight) -> Result<()> {
+        if let Some(why) = &self.fixed_lights {
+            bail!("cannot add a light: {why}");
+        }
+        if self.lights.len() >= MAX_LIGHTS {
+            bail!("cannot add a light: rrf renders at most {MAX_LIGHTS}");
+        }
+        self.lights.push(light);
+        self.selected = self.lights.len() - 1;
+        self.light_tween = None;
+        let p = light.position;
+        self.set_light(p);
+        Ok(())
+    }
+
+    /// Adds a copy of the selected light where it is (the `L` key).
+    pub fn duplicate_light(&mut self) -> Result<()> {
+        self.add_light(*self.light())
+    }
+
+    /// Selects light `index` (from 0).
+    pub fn select_light(&mut self, index: usize) -> Result<()> {
+        if index >= self.lights.len() {
+            bail!("there is no light {} (there are {})", index + 1, self.lights.len());
+        }
+        self.selected = index;
+        self.light_tween = None;
+        Ok(())
+    }
+
+    /// Removes the selected light, unless it is the last one.
+    pub fn remove_light(&mut self) -> Result<()> {
+        if self.lights.len() == 1 {
+            bail!("cannot remove the last light");
+        }
+        self.lights.remove(self.selected);
+        self.selected = self.selected.saturating_sub(1);
+        self.light_tween = None;
+        Ok(())
+    }
+
+    /// Sets the selected light's colour and intensity (`scale` = colour × intensity).
+    pub fn set_light_scale(&mut self, scale: Vec3) -> Result<()> {
+        if let Some(why) = &self.fixed_lights {
+            bail!("cannot recolour or dim the light: {why}");
+        }
+        self.lights[self.selected].scale = scale.clamp(Vec3::ZERO, Vec3::splat(MAX_INTENSITY));
+        Ok(())
+    }
+
+    /// Multiplies the selected light's intensity by `factor` (the `+` and `-` keys).
+    pub fn scale_intensity(&mut self, factor: f32) -> Result<()> {
+        self.set_light_scale(self.light().scale * factor)
+    }
+
+    /// Gives the selected light the next of [`COLOURS`], at its intensity (the `C` key).
+    pub fn next_colour(&mut self) -> Result<()> {
+        let scale = self.light().scale;
+        let intensity = scale.max_element();
+        let now = COLOURS.iter().position(|c| (*c * intensity - scale).abs().max_element() < 1e-4 * intensity.max(1.0));
+        let next = COLOURS[now.map_or(0, |i| (i + 1) % COLOURS.len())];
+        self.set_light_scale(next * intensity)
     }
 
     /// Turns the camera by a mouse move of `dx`, `dy` pixels.
@@ -148,7 +238,12 @@ impl ViewerState {
     pub fn reset(&mut self) {
         let home = self.home.clone();
         self.set_camera(home.eye, home.target);
-        self.set_light(self.home_light);
+        self.lights = self.home_lights.clone();
+        for i in 0..self.lights.len() {
+            self.selected = i;
+            self.set_light(self.lights[i].position);
+        }
+        self.selected = 0;
         self.camera_tween = None;
         self.light_tween = None;
     }
@@ -179,7 +274,7 @@ impl ViewerState {
             self.light_tween = None;
             // Half the light box's diagonal per second.
             let span = self.light_box.as_ref().map_or(1.0, |b| (b.max - b.min).length().max(1e-3));
-            self.set_light(self.light + light_walk.normalize() * span * 0.5 * dt);
+            self.set_light(self.light().position + light_walk.normalize() * span * 0.5 * dt);
         }
         if let Some(tween) = self.camera_tween {
             let ([eye, target], done) = tween.at(t);
@@ -199,7 +294,7 @@ impl ViewerState {
 
     /// Applies a script action that changes the view (the caller handles the others) at
     /// script time `t`.
-    pub fn apply(&mut self, action: &Action, t: f64) {
+    pub fn apply(&mut self, action: &Action, t: f64) -> Result<()> {
         match *action {
             Action::Camera { eye, target, over } => {
                 let from = [self.eye, self.eye + self.forward()];
@@ -207,14 +302,25 @@ impl ViewerState {
                 self.update(&Default::default(), 0.0, t);
             }
             Action::Light { position, over } => {
-                self.light_tween = Some(Tween { from: [self.light; 2], to: [position; 2], start: t, seconds: over });
+                let from = [self.light().position; 2];
+                self.light_tween = Some(Tween { from, to: [position; 2], start: t, seconds: over });
                 self.update(&Default::default(), 0.0, t);
             }
+            Action::AddLight(light) => self.add_light(light)?,
+            Action::SelectLight(number) => self.select_light(number - 1)?,
+            Action::RemoveLight => self.remove_light()?,
+            Action::LightScale(scale) => self.set_light_scale(scale)?,
             Action::Component(shown) => self.shown = shown,
             Action::Exposure(ev) => self.exposure = ev,
             Action::Overlay(on) => self.overlay = on,
             Action::Resize(..) | Action::Screenshot(_) | Action::Quit => {}
         }
+        Ok(())
+    }
+
+    /// Runs a light edit from a key: a refusal goes to the overlay instead of failing.
+    pub fn key_edit(&mut self, edit: impl FnOnce(&mut Self) -> Result<()>) {
+        self.light_note = edit(self).err().map(|e| e.to_string());
     }
 
     /// The overlay's text for the current frame: one dark box of lines of equal width.
@@ -228,10 +334,26 @@ impl ViewerState {
         let gpu = stats.recent_gpu_ms();
         let passes: Vec<String> = TIMED_PASSES.iter().zip(gpu).map(|(name, ms)| format!("{name} {ms:.2}")).collect();
         lines.push((format!("GPU ms: {}", passes.join("  ")), Colour::White));
-        let l = self.light;
+        let (l, k) = (self.light().position, self.light().scale);
         let edge = if self.light_at_edge { "  at the edge of its trained box" } else { "" };
         let colour = if self.light_at_edge { Colour::Yellow } else { Colour::White };
-        lines.push((format!("light {:.2},{:.2},{:.2}{edge}", l.x, l.y, l.z), colour));
+        lines.push((
+            format!(
+                "light {}/{} at {:.2},{:.2},{:.2}  x {:.2},{:.2},{:.2}{edge}",
+                self.selected + 1,
+                self.lights.len(),
+                l.x,
+                l.y,
+                l.z,
+                k.x,
+                k.y,
+                k.z
+            ),
+            colour,
+        ));
+        if let Some(note) = &self.light_note {
+            lines.push((note.clone(), Colour::Yellow));
+        }
         let e = self.eye;
         let outside = self.camera_box.as_ref().is_some_and(|b| !b.contains(e));
         let note = if outside { "  outside its trained box" } else { "" };
@@ -255,11 +377,23 @@ impl ViewerState {
     }
 }
 
+/// The colours the `C` key steps through: white, warm, cool, red, green, blue.
+pub const COLOURS: [Vec3; 6] = [
+    Vec3::ONE,
+    Vec3::new(1.0, 0.75, 0.5),
+    Vec3::new(0.6, 0.8, 1.0),
+    Vec3::new(1.0, 0.25, 0.2),
+    Vec3::new(0.3, 1.0, 0.3),
+    Vec3::new(0.3, 0.4, 1.0),
+];
+
 /// The controls, as the overlay shows them.
-pub const HELP: [&str; 6] = [
+pub const HELP: [&str; 8] = [
     "W A S D: move   Q E: down, up   Shift: faster   wheel: speed",
     "right mouse button held: look around",
     "arrows, Page Up/Down: move the light (inside its trained box)",
+    "L: add a light here   Tab: next light   Delete: remove it",
+    "C: its colour   - =: dim, brighten it",
     "1 2 3: global, direct, indirect light   [ ]: exposure",
     "P: screenshot   R: reset view and light   O: overlay",
     "H: hide this help   Esc: quit",
@@ -269,11 +403,58 @@ pub const HELP: [&str; 6] = [
 mod tests {
     use super::*;
 
-    fn state() -> ViewerState {
-        let scene = Scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box")).unwrap();
+    fn shipped(name: &str) -> ViewerState {
+        let scene = Scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).unwrap();
         let view = scene.views[0].clone();
-        let light = scene.moving_light.as_ref().unwrap().default_position;
-        ViewerState::new(&scene, view, light)
+        ViewerState::new(&scene, view, vec![scene.default_light()])
+    }
+
+    fn state() -> ViewerState {
+        shipped("cornell-box")
+    }
+
+    #[test]
+    fn lights_are_added_selected_recoloured_and_removed() {
+        let mut s = state();
+        let first = *s.light();
+        s.duplicate_light().unwrap();
+        assert_eq!((s.lights.len(), s.selected), (2, 1));
+        // The arrows move only the selected light.
+        let held = [Held::LightLeft].into_iter().collect();
+        s.update(&held, 0.1, 0.0);
+        assert_eq!(s.lights[0], first);
+        assert!(s.lights[1].position.x < first.position.x);
+        s.next_colour().unwrap();
+        assert_eq!(s.light().scale, COLOURS[1]);
+        s.scale_intensity(0.5).unwrap();
+        assert_eq!(s.light().scale, COLOURS[1] * 0.5);
+        s.next_colour().unwrap();
+        assert!((s.light().scale - COLOURS[2] * 0.5).abs().max_element() < 1e-6);
+        s.select_light(0).unwrap();
+        assert!(s.select_light(2).is_err());
+        s.remove_light().unwrap();
+        assert_eq!(s.lights.len(), 1);
+        assert_eq!(s.light().scale, COLOURS[2] * 0.5, "the second light is left");
+        assert!(s.remove_light().is_err(), "the last light stays");
+        for _ in 1..MAX_LIGHTS {
+            s.duplicate_light().unwrap();
+        }
+        assert!(s.duplicate_light().is_err());
+        s.reset();
+        assert_eq!(s.lights, vec![first]);
+        let text = s.overlay_text(&Stats::default(), "test").text();
+        assert!(text.contains("light 1/1 at"), "{text}");
+    }
+
+    #[test]
+    fn a_scene_with_other_lights_keeps_its_one_light() {
+        let mut s = shipped("gallery");
+        s.key_edit(ViewerState::duplicate_light);
+        assert_eq!(s.lights.len(), 1);
+        let note = s.light_note.clone().unwrap();
+        assert!(note.contains("Screen"), "{note}");
+        assert!(s.scale_intensity(2.0).is_err() && s.next_colour().is_err());
+        assert!(s.overlay_text(&Stats::default(), "test").text().contains(&note));
     }
 
     #[test]
@@ -293,11 +474,11 @@ mod tests {
         for _ in 0..600 {
             s.update(&held, 1.0 / 60.0, 0.0);
         }
-        assert!(b.contains(s.light));
-        assert!((s.light.y - b.max.y).abs() < 1e-6 && s.light_at_edge);
+        assert!(b.contains(s.light().position));
+        assert!((s.light().position.y - b.max.y).abs() < 1e-6 && s.light_at_edge);
         assert!(s.overlay_text(&Stats::default(), "test").text().contains("edge of its trained box"));
         s.reset();
-        assert!(!s.light_at_edge || b.contains(s.light));
+        assert!(!s.light_at_edge || b.contains(s.light().position));
     }
 
     #[test]
@@ -305,7 +486,7 @@ mod tests {
         let mut s = state();
         let start = s.eye;
         let goal = start + Vec3::new(0.1, 0.0, 0.0);
-        s.apply(&Action::Camera { eye: goal, target: goal + Vec3::Z, over: 1.0 }, 0.0);
+        s.apply(&Action::Camera { eye: goal, target: goal + Vec3::Z, over: 1.0 }, 0.0).unwrap();
         s.update(&Default::default(), 0.0, 0.5);
         assert!(s.eye.distance(start.lerp(goal, 0.5)) < 1e-5);
         s.update(&Default::default(), 0.0, 2.0);

@@ -13,7 +13,7 @@ use winit::window::{Window, WindowId};
 
 use super::renderer::{Presenter, Renderer};
 use super::state::Held;
-use super::Session;
+use super::{Session, ViewerState};
 use crate::gpu_frame::Shown;
 
 /// The key held for a continuous action, by physical position (WASD works on any layout).
@@ -125,6 +125,12 @@ impl App<'_> {
             KeyCode::KeyH => state.help = !state.help,
             KeyCode::KeyO => state.overlay = !state.overlay,
             KeyCode::KeyR => state.reset(),
+            KeyCode::KeyL => state.key_edit(ViewerState::duplicate_light),
+            KeyCode::Tab => state.key_edit(|s| s.select_light((s.selected + 1) % s.lights.len())),
+            KeyCode::Delete | KeyCode::Backspace => state.key_edit(ViewerState::remove_light),
+            KeyCode::KeyC => state.key_edit(ViewerState::next_colour),
+            KeyCode::Minus | KeyCode::NumpadSubtract => state.key_edit(|s| s.scale_intensity(0.5f32.sqrt())),
+            KeyCode::Equal | KeyCode::NumpadAdd => state.key_edit(|s| s.scale_intensity(2f32.sqrt())),
             KeyCode::KeyP => self.session.screenshot_key(),
             _ => {}
         }

@@ -102,13 +102,15 @@ impl<'a> World<'a> {
             .collect();
         if let Some(LightKind::Point(i)) = moving.map(|l| l.kind) {
             let trained = point_lights[i];
-            let copy = |k: usize| PointLightAt {
-                position: trained.position + offsets[k],
-                intensity: trained.intensity * lights[k].scale,
-                ..trained
-            };
-            point_lights[i] = copy(0);
-            point_lights.extend((1..lights.len()).map(copy));
+            let copies: Vec<PointLightAt> = (0..lights.len())
+                .map(|k| PointLightAt {
+                    position: trained.position + offsets[k],
+                    intensity: trained.intensity * lights[k].scale,
+                    ..trained
+                })
+                .collect();
+            point_lights[i] = copies[0];
+            point_lights.extend_from_slice(&copies[1..]);
         }
 
         let mut emitters = Vec::new();

@@ -1,0 +1,85 @@
+//! Several lights end to end: a frame lit by two coloured copies of the Cornell box's ceiling
+//! light, from the shipped networks on the GPU, against the path-traced two-light reference.
+//!
+//! Its error must stay within that of the one-light frames of the same two lights. Light is
+//! linear in the emission, so per pixel |pA + pB − (rA + rB)| ≤ |pA − rA| + |pB − rB|: the
+//! two-light frame's mean absolute error is at most the sum of the one-light frames', up to
+//! the references' noise, if summing the networks per light (and drawing each light's own
+//! geometry) adds no error of its own.
+
+mod common;
+
+use std::path::Path;
+
+use common::{finish_clean, gpu};
+use rrf::eval::metrics::{compare, Metrics};
+use rrf::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
+use rrf_baker::glam::Vec3;
+use rrf_baker::model::Model;
+use rrf_baker::scene::{PlacedLight, Scene};
+use rrf_baker::trace::{render, Camera, Geometry, RenderSettings, TraceSettings, World};
+use rrf_renderer::network_pass::Variant;
+use rrf_renderer::vk;
+
+const SIZE: u32 = 64;
+
+#[test]
+fn two_lights_match_the_path_traced_two_light_reference() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box");
+    let scene = Scene::load(&dir).unwrap();
+    let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
+    let view = scene.views[0].clone();
+    let warm = PlacedLight { position: Vec3::new(0.2, 0.5, 0.2), scale: Vec3::new(1.0, 0.7, 0.4) };
+    let cool = PlacedLight { position: Vec3::new(0.38, 0.46, 0.4), scale: Vec3::new(0.4, 0.6, 1.0) };
+    let cases = [vec![warm], vec![cool], vec![warm, cool]];
+
+    let ctx = gpu();
+    let extent = vk::Extent2D { width: SIZE, height: SIZE };
+    let frame = GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance).unwrap();
+    let predicted: Vec<Vec<Vec3>> = cases
+        .iter()
+        .map(|lights| {
+            let settings =
+                FrameSettings { view: view.clone(), lights: lights.clone(), exposure_scale: 1.0, shown: Shown::Gi };
+            rgb(&frame.render(&ctx, &settings).unwrap().gi)
+        })
+        .collect();
+    frame.destroy(&ctx);
+    finish_clean(ctx);
+
+    let geometry = Geometry::new(&scene);
+    let camera = Camera::new(&view, 1.0);
+    let settings = RenderSettings {
+        width: SIZE,
+        height: SIZE,
+        spp: 256,
+        trace: TraceSettings { max_depth: 8, rr_depth: Some(5) },
+        seed: 7,
+    };
+    let errors: Vec<(f64, Metrics)> = cases
+        .iter()
+        .zip(&predicted)
+        .map(|(lights, predicted)| {
+            let world = World::with_lights(&scene, &geometry, lights);
+            let reference = render(&world, &camera, &settings, &|_| {}).component(|r| r.gi());
+            let absolute = predicted.iter().zip(&reference).map(|(p, r)| f64::from((*p - *r).abs().element_sum()));
+            (absolute.sum::<f64>() / (3 * reference.len()) as f64, compare(predicted, &reference, SIZE, SIZE).metrics)
+        })
+        .collect();
+    for (name, (mae, m)) in ["warm", "cool", "both"].iter().zip(&errors) {
+        eprintln!(
+            "{name}: mean absolute error {mae:.5}, relMSE {:.4}, FLIP {:.4}, PSNR {:.2} dB",
+            m.relmse, m.flip, m.psnr
+        );
+    }
+    let (warm_error, cool_error, both) = (errors[0].0, errors[1].0, &errors[2]);
+    // 10% for the references' noise (three independent 256 spp renders).
+    assert!(
+        both.0 <= 1.1 * (warm_error + cool_error),
+        "two lights: mean absolute error {} over the one-light frames' {warm_error} + {cool_error}",
+        both.0
+    );
+    // The picture's error stays near one light's (FLIP is not additive: a loose bound).
+    let worst_flip = errors[..2].iter().map(|e| e.1.flip).fold(0.0, f64::max);
+    assert!(both.1.flip <= 1.5 * worst_flip, "two lights: FLIP {} vs one light's {worst_flip}", both.1.flip);
+}
