@@ -13,7 +13,7 @@ use rrf_baker::model::Model;
 use rrf_baker::network::Component;
 use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
-use rrf_renderer::network_pass::{NetworkConstants, NetworkPass, NetworkShaders, ObjectNetworks, Variant};
+use rrf_renderer::network_pass::{DirectLight, NetworkConstants, NetworkPass, NetworkShaders, ObjectNetworks, Variant};
 use rrf_renderer::overlay::{OverlayPass, TextGrid};
 use rrf_renderer::resources::read_back_passes;
 use rrf_renderer::sync::{run_passes, Pass, Resource, ResourceStates};
@@ -21,8 +21,8 @@ use rrf_renderer::tonemap::TonemapPass;
 use rrf_renderer::{vk, Context, Destroy, Image};
 
 use crate::gpu_scene::{
-    gbuffer_constants, gbuffer_mesh, light_copies, moving_light_object, network_lights, network_materials,
-    surface_materials,
+    analytic_light, gbuffer_constants, gbuffer_mesh, light_copies, moving_light_object, network_lights,
+    network_materials, surface_materials,
 };
 use crate::shaders;
 
@@ -97,6 +97,45 @@ pub enum FrameOutput {
     Display,
 }
 
+/// Where a frame's direct light comes from (`--direct`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Direct {
+    /// From each object's direct network: any kind of light, area lights included.
+    #[default]
+    Learned,
+    /// Computed per pixel from the baker's BRDF for a point or spot light, with shadows from
+    /// cube shadow maps (the RRF paper's own mode; sharp shadows). Needs the tiled or
+    /// per-object variant, and a scene whose only light is its moving point light.
+    Analytic,
+}
+
+impl Direct {
+    /// Whether `scene` can be rendered this way: analytic direct light needs the scene's only
+    /// light to be its moving point or spot light.
+    pub fn check(self, scene: &Scene) -> Result<()> {
+        match self {
+            Direct::Learned => Ok(()),
+            Direct::Analytic => analytic_light(scene).map(|_| ()),
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Direct::Learned => "learned",
+            Direct::Analytic => "analytic",
+        }
+    }
+}
+
+impl From<Direct> for rrf_baker::predict::Direct {
+    fn from(d: Direct) -> Self {
+        match d {
+            Direct::Learned => rrf_baker::predict::Direct::Learned,
+            Direct::Analytic => rrf_baker::predict::Direct::Analytic,
+        }
+    }
+}
+
 /// What changes from frame to frame.
 #[derive(Clone, Debug)]
 pub struct FrameSettings {
@@ -143,6 +182,7 @@ impl GpuFrame {
         variant: Variant,
         extent: vk::Extent2D,
         output: FrameOutput,
+        direct: Direct,
     ) -> Result<Self> {
         // Each part is destroyed again if a later one cannot be made.
         let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
@@ -161,8 +201,24 @@ impl GpuFrame {
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
         let display = (output == FrameOutput::Display && variant != Variant::Storage).then_some(&*ldr);
         let materials = network_materials(scene);
-        let network =
-            ctx.guard(NetworkPass::new(ctx, variant, &network_shaders, &targets, &objects, &materials, display)?);
+        let direct = match direct {
+            Direct::Learned => DirectLight::Learned,
+            Direct::Analytic => DirectLight::Analytic {
+                light: analytic_light(scene)?,
+                shadow_vertex: shaders::SHADOW_VERT,
+                shadow_fragment: shaders::SHADOW_FRAG,
+            },
+        };
+        let network = ctx.guard(NetworkPass::new(
+            ctx,
+            variant,
+            &network_shaders,
+            &targets,
+            &objects,
+            &materials,
+            display,
+            direct,
+        )?);
         let mut tonemaps = ctx.guard(Vec::with_capacity(3));
         for hdr in network.outputs().into_iter().flat_map(|o| [&o.gi, &o.direct, &o.indirect]) {
             tonemaps.push(TonemapPass::new(ctx, shaders::TONEMAP_COMP, hdr, &ldr)?);
@@ -284,7 +340,7 @@ impl GpuFrame {
         };
         stamp(&mut passes, 1);
         let display = self.network.outputs().is_none().then_some(&self.ldr);
-        passes.extend(self.network.passes(ctx, &self.targets, n, display)?);
+        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, n, display)?);
         stamp(&mut passes, 2);
         if let Some(outputs) = self.network.outputs() {
             let (tonemap, hdr) = match settings.shown {

@@ -4,7 +4,7 @@
 use rrf_baker::glam::{Mat4, Vec3, Vec4};
 use rrf_baker::scene::{self, AlphaMode, ColorSpace, LightKind, PlacedLight, Scene, View};
 use rrf_renderer::gbuffer::{GBufferConstants, GBufferVertex, LightCopy, SurfaceMaterial, TextureRef};
-use rrf_renderer::network_pass::NetworkLight;
+use rrf_renderer::network_pass::{NetworkLight, PointLightShape, Spot};
 
 /// The object id of the moving light's own geometry (an area light), if it has any.
 pub fn moving_light_object(scene: &Scene) -> Option<u32> {
@@ -18,6 +18,31 @@ pub fn moving_light_object(scene: &Scene) -> Option<u32> {
 /// glTF puts the light (`default`), and how its emission is scaled there.
 pub fn light_copies(default: Vec3, lights: &[PlacedLight]) -> Vec<LightCopy> {
     lights.iter().map(|l| LightCopy { offset: (l.position - default).to_array(), scale: l.scale.to_array() }).collect()
+}
+
+/// The point light whose direct light the network pass computes in analytic mode: the
+/// scene's moving light, which must be a point or spot light and the scene's only light.
+pub fn analytic_light(scene: &Scene) -> anyhow::Result<PointLightShape> {
+    let Some(LightKind::Point(i)) = scene.moving_light.as_ref().map(|l| l.kind) else {
+        anyhow::bail!(
+            "--direct analytic needs a moving point or spot light; scene {} has {}",
+            scene.name,
+            if scene.moving_light.is_some() { "a moving area light (use --direct learned)" } else { "no moving light" }
+        );
+    };
+    let others = scene.static_lights();
+    if !others.is_empty() {
+        anyhow::bail!(
+            "--direct analytic computes the moving light's direct light only, and scene {} is also lit by {}",
+            scene.name,
+            others.join(", ")
+        );
+    }
+    let light = &scene.point_lights[i];
+    Ok(PointLightShape {
+        intensity: light.intensity.to_array(),
+        spot: light.cone.map(|c| Spot { axis: c.direction.to_array(), cos_inner: c.cos_inner, cos_outer: c.cos_outer }),
+    })
 }
 
 /// `lights` as the network pass reads them.

@@ -1,5 +1,5 @@
-//! Coordinates on the command line: negative values are values, not flags, and `--camera`
-//! works on a scene whose glTF has no camera.
+//! Arguments on the command line: negative coordinates are values, not flags; `--camera`
+//! works on a scene whose glTF has no camera; `--direct analytic` refuses what it cannot do.
 
 mod common;
 
@@ -56,4 +56,21 @@ fn a_free_camera_needs_no_camera_in_the_gltf() {
         assert!(stderr.contains("no camera"), "the import says what it chose: {stderr}");
     }
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `--direct analytic` says why it cannot run: an area light, or the storage variant.
+#[test]
+fn analytic_direct_light_refuses_what_it_cannot_do() {
+    let out = std::env::temp_dir().join(format!("rrf-analytic-{}.png", std::process::id()));
+    let out = out.to_str().unwrap();
+    let area = rrf(&["render", "scenes/cornell-box", "--direct", "analytic", "--size", "8x8", "-o", out], &[]);
+    let stderr = String::from_utf8_lossy(&area.stderr);
+    assert!(!area.status.success() && stderr.contains("moving area light"), "{stderr}");
+    let storage = rrf(
+        &["render", "scenes/many-objects", "--direct", "analytic", "--variant", "storage", "--size", "8x8", "-o", out],
+        &[],
+    );
+    let stderr = String::from_utf8_lossy(&storage.stderr);
+    assert!(!storage.status.success() && stderr.contains("specialized network variant"), "{stderr}");
+    assert!(!std::path::Path::new(out).exists());
 }

@@ -98,6 +98,82 @@ fn scripted_window_run_is_clean_and_matches_render() {
     }
 }
 
+/// Lights added, moved, recoloured and removed by a script give the frame that `rrf render`
+/// gives with the lights that are left.
+#[test]
+fn scripted_light_edits_match_render_with_the_same_lights() {
+    let shot = temp("lights.png");
+    let script = temp("lights.txt");
+    std::fs::write(
+        &script,
+        format!(
+            "0    add-light 0.2,0.5,0.2:color=1,0.5,0.2\n\
+             0.05 light 0.36,0.45,0.38 over 0.1\n\
+             0.2  add-light 0.3,0.5,0.3\n\
+             0.25 light-color 0.3,0.5,1 intensity 2\n\
+             0.3  select-light 1\n\
+             0.35 remove-light\n\
+             0.45 screenshot {}\n",
+            shot.display()
+        ),
+    )
+    .unwrap();
+    let run = rrf(
+        &[
+            "view",
+            "scenes/cornell-box",
+            "--headless",
+            "--size",
+            "96x96",
+            "--no-overlay",
+            "--script",
+            script.to_str().unwrap(),
+        ],
+        &[("RRF_VALIDATION", "required")],
+    );
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let reference = temp("lights-render.png");
+    let render = rrf(
+        &[
+            "render",
+            "scenes/cornell-box",
+            "--light",
+            "0.36,0.45,0.38:color=1,0.5,0.2",
+            "--light",
+            "0.3,0.5,0.3:color=0.3,0.5,1:intensity=2",
+            "--size",
+            "96x96",
+            "-o",
+            reference.to_str().unwrap(),
+        ],
+        &[("RRF_VALIDATION", "required")],
+    );
+    assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
+    let (off, mean) = difference(&load(&shot), &load(&reference), 2);
+    assert!(off * 100 <= 96 * 96 && mean < 0.5, "{off} pixels differ by more than 2 levels; mean {mean:.3}");
+    for f in [shot, script, reference] {
+        let _ = std::fs::remove_file(f);
+    }
+}
+
+/// A scene whose networks also learned another light refuses a second light, naming it.
+#[test]
+fn a_scene_with_other_lights_refuses_a_second_one() {
+    let script = temp("gallery-lights.txt");
+    std::fs::write(&script, "0.1 add-light 0,2.5,0\n").unwrap();
+    let run =
+        rrf(&["view", "scenes/gallery", "--headless", "--size", "32x32", "--script", script.to_str().unwrap()], &[]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(stderr.contains("script event at 0.1 s") && stderr.contains("Screen"), "{stderr}");
+    let out = temp("gallery.png");
+    let render = rrf(&["render", "scenes/gallery", "--light", "default:intensity=2", "-o", out.to_str().unwrap()], &[]);
+    let stderr = String::from_utf8_lossy(&render.stderr);
+    assert!(!render.status.success() && stderr.contains("also lit by Screen"), "{stderr}");
+    assert!(!out.exists());
+    let _ = std::fs::remove_file(script);
+}
+
 #[test]
 fn without_a_display_it_renders_headless_and_says_where() {
     let dir = temp("headless");

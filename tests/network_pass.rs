@@ -6,7 +6,7 @@ mod common;
 use std::path::Path;
 
 use common::{finish_clean, gpu};
-use rrf::gpu_frame::{FrameOutput, FrameSettings, GpuFrame, Shown};
+use rrf::gpu_frame::{Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
@@ -25,6 +25,20 @@ fn at(position: Vec3) -> Vec<PlacedLight> {
 }
 
 fn compare(scene_name: &str, view_name: &str, lights: &[PlacedLight], width: u32, height: u32) {
+    compare_with(scene_name, view_name, lights, (width, height), Direct::Learned, &Variant::ALL, 0.999);
+}
+
+/// The GPU's `variants` against the CPU inference with direct light from `direct`: at least
+/// `share` of the pixels of every component within [`TOLERANCE`].
+fn compare_with(
+    scene_name: &str,
+    view_name: &str,
+    lights: &[PlacedLight],
+    (width, height): (u32, u32),
+    direct: Direct,
+    variants: &[Variant],
+    share: f64,
+) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene_name);
     let scene = Scene::load(&dir).unwrap();
     let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
@@ -32,13 +46,13 @@ fn compare(scene_name: &str, view_name: &str, lights: &[PlacedLight], width: u32
 
     let ctx = gpu();
     let extent = vk::Extent2D { width, height };
-    let rendered: Vec<_> = Variant::ALL
+    let rendered: Vec<_> = variants
         .iter()
         .map(|&variant| {
             // One frame serves every configuration: it starts at another size with the light
             // where the glTF puts it, then is resized and given the lights.
             let start = vk::Extent2D { width: width / 2 + 3, height: height / 2 + 1 };
-            let mut frame = GpuFrame::new(&ctx, &scene, &model, variant, start, FrameOutput::Radiance).unwrap();
+            let mut frame = GpuFrame::new(&ctx, &scene, &model, variant, start, FrameOutput::Radiance, direct).unwrap();
             let mut settings = FrameSettings {
                 view: view.clone(),
                 lights: vec![scene.default_light()],
@@ -57,7 +71,8 @@ fn compare(scene_name: &str, view_name: &str, lights: &[PlacedLight], width: u32
 
     let geometry = Geometry::new(&scene);
     let world = World::with_lights(&scene, &geometry, lights);
-    let cpu = predict_image(&world, &Camera::new(&view, width as f32 / height as f32), &model, width, height);
+    let camera = Camera::new(&view, width as f32 / height as f32);
+    let cpu = predict_image(&world, &camera, &model, (width, height), direct.into());
 
     for (variant, pixels) in &rendered {
         let variant = variant.name();
@@ -67,7 +82,7 @@ fn compare(scene_name: &str, view_name: &str, lights: &[PlacedLight], width: u32
             ("gi", &pixels.gi, |r| r.gi()),
         ];
         for (name, gpu_pixels, pick) in components {
-            check(&format!("{scene_name} {variant} {name}"), &cpu.pixels, gpu_pixels, pick);
+            check(&format!("{scene_name} {variant} {name}"), &cpu.pixels, gpu_pixels, pick, share);
         }
     }
 }
@@ -79,8 +94,8 @@ fn compare(scene_name: &str, view_name: &str, lights: &[PlacedLight], width: u32
 /// the ray cast see different objects.)
 const TOLERANCE: f32 = 5e-3;
 
-/// At least 99.9% of the pixels within [`TOLERANCE`].
-fn check(what: &str, cpu: &[Radiance], gpu: &[f32], pick: Pick) {
+/// At least `share` of the pixels within [`TOLERANCE`].
+fn check(what: &str, cpu: &[Radiance], gpu: &[f32], pick: Pick, share: f64) {
     let mut within = 0;
     let mut worst = 0.0f32;
     for (i, r) in cpu.iter().enumerate() {
@@ -93,7 +108,7 @@ fn check(what: &str, cpu: &[Radiance], gpu: &[f32], pick: Pick) {
     }
     let n = cpu.len();
     eprintln!("{what}: {within}/{n} pixels within {TOLERANCE:e} relative, worst {worst:.2e}");
-    assert!(within as f64 >= 0.999 * n as f64, "{what}: only {within} of {n} pixels within {TOLERANCE:e}");
+    assert!(within as f64 >= share * n as f64, "{what}: only {within} of {n} pixels within {TOLERANCE:e}");
 }
 
 #[test]
@@ -119,6 +134,21 @@ fn gpu_matches_cpu_inference_many_objects() {
     compare("many-objects", "table", &at(Vec3::new(0.8, 2.2, -0.5)), 120, 80);
 }
 
+/// Analytic direct light, two coloured copies of the lamp: the BRDF on the GPU with cube
+/// shadow maps against the path tracer's next-event estimate with shadow rays. Lit and shadowed
+/// pixels agree (tests/brdf.rs holds the BRDFs together); they differ where a shadow map
+/// texel (256² per cube face, 2×2 filtered) straddles a shadow's edge: 4% of these pixels,
+/// since the table, chairs and vases throw many edges.
+#[test]
+fn analytic_direct_matches_the_cpu_many_objects() {
+    let lights = [
+        PlacedLight { position: Vec3::new(0.8, 2.2, -0.5), scale: Vec3::ONE },
+        PlacedLight { position: Vec3::new(-1.2, 2.5, 0.6), scale: Vec3::new(0.3, 0.5, 1.0) },
+    ];
+    let variants = [Variant::Tiled, Variant::PerObject];
+    compare_with("many-objects", "table", &lights, (120, 80), Direct::Analytic, &variants, 0.95);
+}
+
 /// Textured surfaces, whose networks' output the G-buffer's reflectance multiplies, a normal
 /// map, alpha-masked leaves and a textured emitter.
 #[test]
@@ -136,9 +166,11 @@ fn display_frame_matches_the_tonemapped_radiance() {
     let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
     let extent = vk::Extent2D { width: 96, height: 64 };
     let ctx = gpu();
-    let radiance = GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance).unwrap();
+    let radiance =
+        GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance, Direct::Learned).unwrap();
     for variant in [Variant::Tiled, Variant::PerObject] {
-        let display = GpuFrame::new(&ctx, &scene, &model, variant, extent, FrameOutput::Display).unwrap();
+        let display =
+            GpuFrame::new(&ctx, &scene, &model, variant, extent, FrameOutput::Display, Direct::Learned).unwrap();
         for shown in [Shown::Gi, Shown::Direct, Shown::Indirect] {
             let settings = FrameSettings {
                 view: scene.views[0].clone(),

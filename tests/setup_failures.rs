@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 
 use common::{finish_clean, gpu};
-use rrf::gpu_frame::{FrameOutput, FrameSettings, GpuFrame, Shown};
+use rrf::gpu_frame::{Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
 use rrf_renderer::network_pass::Variant;
@@ -30,7 +30,7 @@ fn a_frame_that_fails_at_any_set_up_step_leaves_nothing_behind() {
         loop {
             let ctx = gpu();
             ctx.fail_at_step(Some(ctx.steps_taken() + step));
-            match GpuFrame::new(&ctx, &scene, &model, variant, EXTENT, FrameOutput::Radiance) {
+            match GpuFrame::new(&ctx, &scene, &model, variant, EXTENT, FrameOutput::Radiance, Direct::Learned) {
                 Ok(frame) => {
                     frame.destroy(&ctx);
                     finish_clean(ctx);
@@ -53,7 +53,8 @@ fn a_frame_that_fails_at_any_set_up_step_leaves_nothing_behind() {
 fn a_failed_resize_leaves_the_frame_usable_and_nothing_behind() {
     let (scene, model) = cornell_box();
     let ctx = gpu();
-    let mut frame = GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, EXTENT, FrameOutput::Radiance).unwrap();
+    let mut frame =
+        GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, EXTENT, FrameOutput::Radiance, Direct::Learned).unwrap();
     let settings = FrameSettings {
         view: scene.views[0].clone(),
         lights: vec![scene.default_light()],

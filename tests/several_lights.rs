@@ -13,7 +13,7 @@ use std::path::Path;
 
 use common::{finish_clean, gpu};
 use rrf::eval::metrics::{compare, Metrics};
-use rrf::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
+use rrf::gpu_frame::{rgb, Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::scene::{PlacedLight, Scene};
@@ -35,7 +35,8 @@ fn two_lights_match_the_path_traced_two_light_reference() {
 
     let ctx = gpu();
     let extent = vk::Extent2D { width: SIZE, height: SIZE };
-    let frame = GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance).unwrap();
+    let frame =
+        GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance, Direct::Learned).unwrap();
     let predicted: Vec<Vec<Vec3>> = cases
         .iter()
         .map(|lights| {

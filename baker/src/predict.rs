@@ -7,6 +7,8 @@ use rayon::prelude::*;
 use crate::model::Model;
 use crate::network::{raw_inputs, reflectance, Component, Network};
 use crate::scene::PlacedLight;
+use crate::trace::integrator::point_lights_at;
+use crate::trace::sampling::Frame;
 use crate::trace::{Camera, Radiance, RadianceImage, World};
 
 /// The networks of every object, by object id; `None` for objects without one.
@@ -23,10 +25,27 @@ impl<'a> ObjectNetworks<'a> {
     }
 }
 
+/// Where predicted direct light comes from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Direct {
+    /// The direct networks.
+    #[default]
+    Learned,
+    /// The path tracer's next-event estimate of the world's point lights at the hit, which
+    /// is exact (the renderer's analytic mode, with ray-cast shadows for shadow maps).
+    Analytic,
+}
+
 /// One ray through each pixel centre: emission where it hits an emitter, the object's
 /// networks elsewhere (once per light of `world`, at its position, scaled by its `scale`, and
-/// summed), nothing where it hits nothing.
-pub fn predict_image(world: &World, camera: &Camera, model: &Model, width: u32, height: u32) -> RadianceImage {
+/// summed), nothing where it hits nothing. `direct` says where direct light comes from.
+pub fn predict_image(
+    world: &World,
+    camera: &Camera,
+    model: &Model,
+    (width, height): (u32, u32),
+    direct: Direct,
+) -> RadianceImage {
     let networks = ObjectNetworks::new(world, model);
     let size = Vec2::new(width as f32, height as f32);
     let pixels = (0..width * height)
@@ -45,11 +64,14 @@ pub fn predict_image(world: &World, camera: &Camera, model: &Model, width: u32, 
                 };
                 world.lights.iter().map(lit).sum::<Vec3>() * r
             };
-            Radiance {
-                emitted: si.emission,
-                direct: eval(networks.direct[object]),
-                indirect: eval(networks.indirect[object]),
-            }
+            let direct = match direct {
+                Direct::Learned => eval(networks.direct[object]),
+                Direct::Analytic => {
+                    let frame = Frame::new(si.shading_normal);
+                    point_lights_at(world, &si, &frame, frame.to_local(-dir))
+                }
+            };
+            Radiance { emitted: si.emission, direct, indirect: eval(networks.indirect[object]) }
         })
         .collect();
     RadianceImage { width, height, pixels }

@@ -219,24 +219,24 @@ impl Destroy for GBufferTargets {
 /// The scene's triangles, materials and textures on the GPU.
 pub struct GBufferMesh {
     /// The vertices, then the triangles' indices from `index_offset`.
-    buffer: Buffer,
-    index_offset: u64,
+    pub(crate) buffer: Buffer,
+    pub(crate) index_offset: u64,
     /// One [`SurfaceMaterial`] per material.
     materials: Buffer,
     /// Every texture's RGBA8 texels, one word each.
     texels: Buffer,
     /// One draw per run of an object's triangles, culled against the view each frame.
-    draws: Vec<Draw>,
+    pub(crate) draws: Vec<Draw>,
 }
 
 /// A run of one object's triangles in the index buffer, with its bounds.
 #[derive(Clone, Copy, Debug, PartialEq)]
-struct Draw {
-    object: u32,
+pub(crate) struct Draw {
+    pub(crate) object: u32,
     /// Some triangle's material uses a texture: drawn with the pipeline that samples them.
     textured: bool,
-    first_index: u32,
-    index_count: u32,
+    pub(crate) first_index: u32,
+    pub(crate) index_count: u32,
     min: [f32; 3],
     max: [f32; 3],
 }
@@ -413,30 +413,6 @@ impl GBufferPass {
                 )
                 .vk("vkCreatePipelineLayout")?;
             let layout = pass.layout;
-            ctx.step("vkCreateGraphicsPipelines")?;
-            let module = |code| device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None);
-            let vs = module(vertex).vk("vkCreateShaderModule")?;
-            let fs = match module(fragment) {
-                Ok(fs) => fs,
-                Err(e) => {
-                    device.destroy_shader_module(vs, None);
-                    return Err(e).vk("vkCreateShaderModule");
-                }
-            };
-            let stages = [
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::VERTEX)
-                    .module(vs)
-                    .name(c"main"),
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::FRAGMENT)
-                    .module(fs)
-                    .name(c"main"),
-            ];
-            let bindings = [vk::VertexInputBindingDescription::default()
-                .binding(0)
-                .stride(std::mem::size_of::<GBufferVertex>() as u32)
-                .input_rate(vk::VertexInputRate::VERTEX)];
             let attributes = [
                 vk::VertexInputAttributeDescription::default()
                     .location(0)
@@ -454,67 +430,18 @@ impl GBufferPass {
                     .format(vk::Format::R32G32B32A32_SFLOAT)
                     .offset(32),
             ];
-            let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-                .vertex_binding_descriptions(&bindings)
-                .vertex_attribute_descriptions(&attributes);
-            let assembly =
-                vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-            let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
-            // The projection's y flip and Vulkan's y-down framebuffer cancel: front faces are
-            // counter-clockwise on screen, as in the scene.
-            let raster = vk::PipelineRasterizationStateCreateInfo::default()
-                .polygon_mode(vk::PolygonMode::FILL)
-                .cull_mode(vk::CullModeFlags::NONE)
-                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-                .line_width(1.0);
-            let multisample =
-                vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-            let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-                .depth_test_enable(true)
-                .depth_write_enable(true)
-                .depth_compare_op(vk::CompareOp::LESS);
-            let blend =
-                [vk::PipelineColorBlendAttachmentState::default().color_write_mask(vk::ColorComponentFlags::RGBA); 3];
-            let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
-            let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-            let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-            let formats = [SURFACE_FORMAT, ID_FORMAT, SHADING_FORMAT];
-            let mut rendering = vk::PipelineRenderingCreateInfo::default()
-                .color_attachment_formats(&formats)
-                .depth_attachment_format(DEPTH_FORMAT);
-            let info = vk::GraphicsPipelineCreateInfo::default()
-                .stages(&stages)
-                .vertex_input_state(&vertex_input)
-                .input_assembly_state(&assembly)
-                .viewport_state(&viewport)
-                .rasterization_state(&raster)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&depth)
-                .color_blend_state(&blending)
-                .dynamic_state(&dynamic)
-                .layout(layout)
-                .push_next(&mut rendering);
-            let mut created = Ok(());
-            for (i, textured) in [false, true].into_iter().enumerate() {
-                let value = [u32::from(textured)];
-                let entries = [vk::SpecializationMapEntry { constant_id: 0, offset: 0, size: 4 }];
-                let specialization =
-                    vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(&value));
-                let mut stages = stages;
-                stages[1] = stages[1].specialization_info(&specialization);
-                let info = info.stages(&stages);
-                match device.create_graphics_pipelines(vk::PipelineCache::null(), &[info], None) {
-                    Ok(p) => pass.pipelines[i] = p[0],
-                    Err((_, e)) => {
-                        created = Err(e);
-                        break;
-                    }
-                }
-                ctx.set_name(pass.pipelines[i], if textured { "gbuffer (textured)" } else { "gbuffer" });
-            }
-            device.destroy_shader_module(vs, None);
-            device.destroy_shader_module(fs, None);
-            created.vk("vkCreateGraphicsPipelines")?;
+            let raster = Raster {
+                vertex,
+                fragment,
+                attributes: &attributes,
+                color_formats: &[SURFACE_FORMAT, ID_FORMAT, SHADING_FORMAT],
+                depth_format: DEPTH_FORMAT,
+            };
+            // Specialization constant 0 (TEXTURED) off, then on.
+            let pipelines = raster.pipelines(ctx, layout, &[0, 1])?;
+            pass.pipelines.copy_from_slice(&pipelines);
+            ctx.set_name(pass.pipelines[0], "gbuffer");
+            ctx.set_name(pass.pipelines[1], "gbuffer (textured)");
             ctx.set_name(layout, "gbuffer");
         }
         Ok(pass.keep())
@@ -640,6 +567,124 @@ impl Destroy for GBufferPass {
             ctx.device.destroy_pipeline_layout(self.layout, None);
         }
         self.set.destroy(ctx);
+    }
+}
+
+/// A graphics pipeline that rasterises the scene mesh ([`GBufferVertex`]) with depth testing,
+/// for the G-buffer and shadow passes.
+pub(crate) struct Raster<'a> {
+    pub vertex: &'a [u32],
+    pub fragment: &'a [u32],
+    /// The vertex attributes the shaders read, from one binding of `GBufferVertex`s.
+    pub attributes: &'a [vk::VertexInputAttributeDescription],
+    pub color_formats: &'a [vk::Format],
+    pub depth_format: vk::Format,
+}
+
+impl Raster<'_> {
+    /// One pipeline per value of specialization constant 0, with `layout`. No face culling;
+    /// viewport and scissor are dynamic. The caller destroys the pipelines.
+    pub(crate) fn pipelines(
+        &self,
+        ctx: &Context,
+        layout: vk::PipelineLayout,
+        values: &[u32],
+    ) -> Result<Vec<vk::Pipeline>> {
+        let device = &ctx.device;
+        ctx.step("vkCreateGraphicsPipelines")?;
+        // SAFETY: valid create infos that outlive the calls; the modules are destroyed here.
+        unsafe {
+            let module = |code| device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None);
+            let vs = module(self.vertex).vk("vkCreateShaderModule")?;
+            let fs = match module(self.fragment) {
+                Ok(fs) => fs,
+                Err(e) => {
+                    device.destroy_shader_module(vs, None);
+                    return Err(e).vk("vkCreateShaderModule");
+                }
+            };
+            let stages = [
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::VERTEX)
+                    .module(vs)
+                    .name(c"main"),
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::FRAGMENT)
+                    .module(fs)
+                    .name(c"main"),
+            ];
+            let bindings = [vk::VertexInputBindingDescription::default()
+                .binding(0)
+                .stride(std::mem::size_of::<GBufferVertex>() as u32)
+                .input_rate(vk::VertexInputRate::VERTEX)];
+            let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(&bindings)
+                .vertex_attribute_descriptions(self.attributes);
+            let assembly =
+                vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+            let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+            // The projection's y flip and Vulkan's y-down framebuffer cancel: front faces are
+            // counter-clockwise on screen, as in the scene.
+            let raster = vk::PipelineRasterizationStateCreateInfo::default()
+                .polygon_mode(vk::PolygonMode::FILL)
+                .cull_mode(vk::CullModeFlags::NONE)
+                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+                .line_width(1.0);
+            let multisample =
+                vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+            let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+                .depth_test_enable(true)
+                .depth_write_enable(true)
+                .depth_compare_op(vk::CompareOp::LESS);
+            let blend = vec![
+                vk::PipelineColorBlendAttachmentState::default()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA);
+                self.color_formats.len()
+            ];
+            let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
+            let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+            let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+            let mut rendering = vk::PipelineRenderingCreateInfo::default()
+                .color_attachment_formats(self.color_formats)
+                .depth_attachment_format(self.depth_format);
+            let info = vk::GraphicsPipelineCreateInfo::default()
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&assembly)
+                .viewport_state(&viewport)
+                .rasterization_state(&raster)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&depth)
+                .color_blend_state(&blending)
+                .dynamic_state(&dynamic)
+                .layout(layout)
+                .push_next(&mut rendering);
+            let mut pipelines = Vec::with_capacity(values.len());
+            let mut created = Ok(());
+            for &value in values {
+                let value = [value];
+                let entries = [vk::SpecializationMapEntry { constant_id: 0, offset: 0, size: 4 }];
+                let specialization =
+                    vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(&value));
+                let mut stages = stages;
+                stages[1] = stages[1].specialization_info(&specialization);
+                match device.create_graphics_pipelines(vk::PipelineCache::null(), &[info.stages(&stages)], None) {
+                    Ok(p) => pipelines.push(p[0]),
+                    Err((_, e)) => {
+                        created = Err(e);
+                        break;
+                    }
+                }
+            }
+            device.destroy_shader_module(vs, None);
+            device.destroy_shader_module(fs, None);
+            if let Err(e) = created {
+                for p in pipelines {
+                    device.destroy_pipeline(p, None);
+                }
+                return Err(e).vk("vkCreateGraphicsPipelines");
+            }
+            Ok(pipelines)
+        }
     }
 }
 

@@ -14,6 +14,7 @@ pub mod guard;
 pub mod network_pass;
 pub mod overlay;
 pub mod resources;
+pub mod shadow;
 pub mod swapchain;
 pub mod sync;
 pub mod tonemap;

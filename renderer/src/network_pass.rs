@@ -17,9 +17,11 @@ use gpu_allocator::MemoryLocation;
 use crate::compute::{Bind, ComputePass, Dispatch, Specialization};
 use crate::context::Context;
 use crate::error::{Error, Result};
+use crate::gbuffer::GBufferMesh;
 use crate::gbuffer::{self, GBufferTargets};
 use crate::guard::Destroy;
 use crate::resources::{Buffer, Image};
+use crate::shadow::ShadowPass;
 use crate::sync::{Access, Pass, ResourceStates, Use};
 
 /// The network layout, shared with the baker and the shaders (one file, see its header).
@@ -128,10 +130,11 @@ fn fold(params: &[f32], input_min: &[f32; INPUTS], input_max: &[f32; INPUTS], ou
 }
 
 /// Specialization constants of object `id`'s pipeline (see `network_specialized.comp`).
-fn specialization(id: usize, n: &ObjectNetworks, tiled: bool) -> Specialization {
+fn specialization(id: usize, n: &ObjectNetworks, tiled: bool, analytic: bool) -> Specialization {
     let mut words = vec![0u32; FIRST_PARAMETER_ID + 2 * PARAMETERS];
     words[0] = id as u32 + 1;
     words[1] = u32::from(tiled);
+    words[2] = u32::from(analytic);
     let direct = fold(n.direct, &n.input_min, &n.input_max, n.direct_scale);
     let indirect = fold(n.indirect, &n.input_min, &n.input_max, n.indirect_scale);
     for (word, value) in words[FIRST_PARAMETER_ID..].iter_mut().zip(direct.iter().chain(&indirect)) {
@@ -150,6 +153,61 @@ pub const MAX_LIGHTS: usize = 16;
 pub struct NetworkLight {
     pub position: [f32; 4],
     pub scale: [f32; 4],
+}
+
+/// The point light the model was trained with, for analytic direct light: its intensity
+/// (W/sr, linear RGB; on the axis of a spot light) and a spot light's cone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointLightShape {
+    pub intensity: [f32; 3],
+    pub spot: Option<Spot>,
+}
+
+/// A spot light's cone: its axis (unit) and the cosines of its inner and outer angles.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spot {
+    pub axis: [f32; 3],
+    pub cos_inner: f32,
+    pub cos_outer: f32,
+}
+
+/// How the pass gets direct light.
+pub enum DirectLight<'a> {
+    /// From each object's direct network.
+    Learned,
+    /// Computed from the baker's BRDF for copies of point light `light`, with cube shadow maps
+    /// drawn by `shadow.vert` and `shadow.frag` (SPIR-V). The specialized variants only.
+    Analytic { light: PointLightShape, shadow_vertex: &'a [u32], shadow_fragment: &'a [u32] },
+}
+
+/// What the specialized pipelines read for analytic direct light.
+enum Direct {
+    Learned {
+        /// A 1×1 image where the shadow maps would be bound.
+        stand_in: Image,
+    },
+    Analytic {
+        light: PointLightShape,
+        shadow: ShadowPass,
+    },
+}
+
+impl Direct {
+    fn shadow_maps(&self) -> &Image {
+        match self {
+            Direct::Learned { stand_in } => stand_in,
+            Direct::Analytic { shadow, .. } => shadow.atlas(),
+        }
+    }
+}
+
+impl Destroy for Direct {
+    fn destroy(self, ctx: &Context) {
+        match self {
+            Direct::Learned { stand_in } => ctx.destroy_image(stand_in),
+            Direct::Analytic { shadow, .. } => shadow.destroy(ctx),
+        }
+    }
 }
 
 /// Camera and lights, as every variant's shader reads them, and for a pass that writes a
@@ -199,6 +257,10 @@ struct SpecializedPush {
     tile_capacity: u32,
     exposure_scale: f32,
     shown: u32,
+    light_intensity: [f32; 4],
+    spot_axis: [f32; 4],
+    spot_cos_outer: f32,
+    pad: [u32; 3],
 }
 
 #[repr(C)]
@@ -305,6 +367,7 @@ struct Specialized {
     /// Tile lists: `tile_capacity` entries per object id; sized with the image.
     tiles: Buffer,
     tile_capacity: u32,
+    direct: Direct,
 }
 
 impl NetworkPass {
@@ -312,7 +375,9 @@ impl NetworkPass {
     /// reads `gbuffer`. With `display` (an RGBA8 storage image of the G-buffer's size), the
     /// pass writes only that: the component shown, tonemapped, as a window shows it; the
     /// storage variant cannot. `materials` holds each material's emitted radiance (rgb, before
-    /// its emissive texture) and its `KHR_materials_specular` factor.
+    /// its emissive texture) and its `KHR_materials_specular` factor. `direct` says where
+    /// direct light comes from; the storage variant learns it.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Context,
         variant: Variant,
@@ -321,6 +386,7 @@ impl NetworkPass {
         objects: &[Option<ObjectNetworks>],
         materials: &[[f32; 4]],
         display: Option<&Image>,
+        direct: DirectLight,
     ) -> Result<Self> {
         if objects.len() > gbuffer::MAX_OBJECTS || materials.len() > gbuffer::MAX_MATERIALS {
             return Err(Error::Invalid(format!(
@@ -348,6 +414,11 @@ impl NetworkPass {
         let outputs = ctx.guard(outputs);
         let written = Written::of(&outputs, display)?;
         let kind = match variant {
+            Variant::Storage if matches!(direct, DirectLight::Analytic { .. }) => {
+                return Err(Error::Invalid(
+                    "analytic direct light needs a specialized network variant (tiled or per-object)".into(),
+                ))
+            }
             Variant::Storage => match written {
                 Written::Radiance(o) => storage(ctx, shaders.storage, gbuffer, shared, o, objects)?,
                 Written::Display(_) => {
@@ -362,6 +433,7 @@ impl NetworkPass {
                 written,
                 objects,
                 variant == Variant::Tiled,
+                direct,
             )?)),
         };
         Ok(NetworkPass {
@@ -388,6 +460,12 @@ impl NetworkPass {
         for image in self.outputs.iter().flat_map(|o| o.all()) {
             states.set_layout(image, vk::ImageLayout::GENERAL);
         }
+        if let Kind::Specialized(s) = &self.kind {
+            match &s.direct {
+                Direct::Learned { stand_in } => states.set_layout(stand_in, vk::ImageLayout::GENERAL),
+                Direct::Analytic { shadow, .. } => shadow.register(states),
+            }
+        }
     }
 
     /// Remakes the size-dependent resources for `gbuffer`'s new size (and `display`, the
@@ -411,7 +489,9 @@ impl NetworkPass {
         let written = Written::of(&self.outputs, display)?;
         let shared = Shared { materials: &self.materials, lights: &self.lights };
         match &mut self.kind {
-            Kind::Storage { pass, weights } => pass.rebind(ctx, &network_bindings(gbuffer, shared, weights, written)),
+            Kind::Storage { pass, weights } => {
+                pass.rebind(ctx, &network_bindings(gbuffer, shared, weights, written, None))
+            }
             Kind::Specialized(s) => {
                 if let Some((tiles, capacity)) = tiles {
                     ctx.destroy_buffer(std::mem::replace(&mut s.tiles, tiles));
@@ -419,18 +499,21 @@ impl NetworkPass {
                 }
                 let bindings = classify_bindings(gbuffer, &self.materials, &s.trained, &s.dispatch, &s.tiles, written);
                 s.classify.rebind(ctx, &bindings);
-                s.networks.rebind(ctx, &network_bindings(gbuffer, shared, &s.tiles, written));
+                let shadow = Some(s.direct.shadow_maps());
+                s.networks.rebind(ctx, &network_bindings(gbuffer, shared, &s.tiles, written, shadow));
             }
         }
         Ok(())
     }
 
     /// The pass's steps for a frame list. The G-buffer (and for a display pass, `display`)
-    /// must be the ones the pass was made or last resized for.
+    /// must be the ones the pass was made or last resized for; `mesh` is the scene the
+    /// G-buffer drew, which analytic direct light draws into its shadow maps.
     pub fn passes<'a>(
         &'a self,
         ctx: &'a Context,
         gbuffer: &'a GBufferTargets,
+        mesh: &'a GBufferMesh,
         c: NetworkConstants,
         display: Option<&'a Image>,
     ) -> Result<Vec<Pass<'a>>> {
@@ -497,6 +580,7 @@ impl NetworkPass {
                 });
                 let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
                 uses.extend([materials, lights, Use::buffer(&s.tiles, Access::COMPUTE_READ)]);
+                uses.push(read(s.direct.shadow_maps()));
                 if s.tiled {
                     uses.push(Use::buffer(&s.dispatch, Access::INDIRECT_READ));
                 }
@@ -505,6 +589,10 @@ impl NetworkPass {
                     Pass::new("network (specialization constants)", uses, move |cmd| s.record(ctx, cmd, extent, &c));
                 if !s.dispatch_reset.is_empty() {
                     passes.push(reset);
+                }
+                if let Direct::Analytic { shadow, .. } = &s.direct {
+                    let positions = c.lights().iter().map(|l| [l.position[0], l.position[1], l.position[2]]).collect();
+                    passes.push(shadow.pass(ctx, mesh, positions));
                 }
                 passes.extend([classify, networks]);
             }
@@ -536,6 +624,7 @@ impl Destroy for Specialized {
     fn destroy(self, ctx: &Context) {
         self.classify.destroy(ctx);
         self.networks.destroy(ctx);
+        self.direct.destroy(ctx);
         for buffer in [self.trained, self.dispatch, self.tiles] {
             ctx.destroy_buffer(buffer);
         }
@@ -557,6 +646,7 @@ fn network_bindings<'a>(
     shared: Shared<'a>,
     buffer: &'a Buffer,
     written: Written<'a>,
+    shadow_maps: Option<&'a Image>,
 ) -> Vec<Bind<'a>> {
     let mut binds = vec![
         Bind::StorageImage(&gbuffer.surface),
@@ -567,6 +657,7 @@ fn network_bindings<'a>(
         Bind::StorageBuffer(buffer),
     ];
     binds.extend(written.images().into_iter().map(Bind::StorageImage));
+    binds.extend(shadow_maps.map(Bind::StorageImage));
     binds
 }
 
@@ -612,7 +703,7 @@ fn storage(
         bytemuck::cast_slice(&weights),
         vk::BufferUsageFlags::STORAGE_BUFFER,
     )?);
-    let bindings = network_bindings(gbuffer, shared, &weights, Written::Radiance(outputs));
+    let bindings = network_bindings(gbuffer, shared, &weights, Written::Radiance(outputs), None);
     let push = std::mem::size_of::<StoragePush>() as u32;
     let pass = ComputePass::new(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE))?;
     Ok(Kind::Storage { pass, weights: weights.keep() })
@@ -635,6 +726,7 @@ fn tile_buffer(ctx: &Context, objects: usize, extent: vk::Extent2D) -> Result<(B
     Ok((tiles, tile_capacity))
 }
 
+#[allow(clippy::too_many_arguments)] // NetworkPass::new's, passed on
 fn specialized(
     ctx: &Context,
     shaders: &NetworkShaders,
@@ -643,6 +735,7 @@ fn specialized(
     written: Written,
     objects: &[Option<ObjectNetworks>],
     tiled: bool,
+    direct: DirectLight,
 ) -> Result<Specialized> {
     let (classify_spirv, specialized_spirv) = match written {
         Written::Radiance(_) => (shaders.classify, shaders.specialized),
@@ -659,7 +752,7 @@ fn specialized(
     for (id, object) in objects.iter().enumerate() {
         if let Some(n) = object {
             n.check(id)?;
-            specializations.push(specialization(id, n, tiled));
+            specializations.push(specialization(id, n, tiled, matches!(direct, DirectLight::Analytic { .. })));
             trained_ids.push(id);
         }
     }
@@ -684,11 +777,25 @@ fn specialized(
         std::mem::size_of::<ClassifyPush>() as u32,
         (TILE, TILE),
     )?);
+    let direct = ctx.guard(match direct {
+        DirectLight::Learned => {
+            let one = vk::Extent2D { width: 1, height: 1 };
+            let usage = vk::ImageUsageFlags::STORAGE;
+            let stand_in = ctx.guard(ctx.create_image("no shadow maps", one, vk::Format::R32_SFLOAT, usage)?);
+            ctx.submit_once(|cmd| {
+                ctx.transition(cmd, &stand_in, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL)
+            })?;
+            Direct::Learned { stand_in: stand_in.keep() }
+        }
+        DirectLight::Analytic { light, shadow_vertex, shadow_fragment } => {
+            Direct::Analytic { light, shadow: ShadowPass::new(ctx, shadow_vertex, shadow_fragment)? }
+        }
+    });
     let networks = ComputePass::specialized(
         ctx,
         "network (specialization constants)",
         specialized_spirv,
-        &network_bindings(gbuffer, shared, &tiles, written),
+        &network_bindings(gbuffer, shared, &tiles, written, Some(direct.shadow_maps())),
         std::mem::size_of::<SpecializedPush>() as u32,
         (TILE, TILE),
         &specializations,
@@ -704,6 +811,7 @@ fn specialized(
         dispatch_reset,
         tiles: tiles.keep(),
         tile_capacity,
+        direct: direct.keep(),
     })
 }
 
@@ -716,12 +824,21 @@ fn pad(words: &[u32]) -> &[u8] {
 impl Specialized {
     /// The per-object dispatches. Each writes only its own object's pixels of the outputs.
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, c: &NetworkConstants) {
+        let (intensity, spot) = match &self.direct {
+            Direct::Analytic { light, .. } => (light.intensity, light.spot),
+            Direct::Learned { .. } => ([0.0; 3], None),
+        };
+        let spot = spot.unwrap_or(Spot { axis: [0.0; 3], cos_inner: 1.0, cos_outer: 0.0 });
         let push = SpecializedPush {
             eye: c.eye,
             light_count: c.light_count,
             tile_capacity: self.tile_capacity,
             exposure_scale: c.exposure_scale,
             shown: c.shown,
+            light_intensity: [intensity[0], intensity[1], intensity[2], 0.0],
+            spot_axis: [spot.axis[0], spot.axis[1], spot.axis[2], spot.cos_inner],
+            spot_cos_outer: spot.cos_outer,
+            pad: [0; 3],
         };
         for (index, &id) in self.objects.iter().enumerate() {
             let dispatch = if self.tiled {

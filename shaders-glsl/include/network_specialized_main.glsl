@@ -8,6 +8,9 @@
 // With DISPLAY defined (network_display.comp) the pass writes only what the window shows: the
 // chosen component, tonemapped, into one RGBA8 image. Otherwise it writes the direct, indirect
 // and global radiance as RGBA32F images, for read-back.
+//
+// ANALYTIC: direct light is computed (analytic_direct.glsl), not learned; the direct network
+// is compiled out.
 #ifndef RRF_NETWORK_SPECIALIZED_MAIN_GLSL
 #define RRF_NETWORK_SPECIALIZED_MAIN_GLSL
 
@@ -16,15 +19,19 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // The G-buffer's object value (object id + 1) this pipeline shades.
 layout(constant_id = 0) const uint OBJECT = 1u;
 layout(constant_id = 1) const bool TILED = true;
+layout(constant_id = 2) const bool ANALYTIC = false;
 
 // Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
 layout(binding = 5) readonly buffer Tiles { uint tiles[]; };
 #ifdef DISPLAY
 layout(binding = 6, rgba8) uniform writeonly image2D display;
+// The point lights' cube shadow maps (ANALYTIC; a 1×1 stand-in otherwise).
+layout(binding = 7, r32f) uniform readonly image2D shadow_atlas;
 #else
 layout(binding = 6, rgba32f) uniform writeonly image2D out_direct;
 layout(binding = 7, rgba32f) uniform writeonly image2D out_indirect;
 layout(binding = 8, rgba32f) uniform writeonly image2D out_gi;
+layout(binding = 9, r32f) uniform readonly image2D shadow_atlas;
 #endif
 
 layout(push_constant) uniform Constants {
@@ -34,10 +41,16 @@ layout(push_constant) uniform Constants {
     // DISPLAY only: 2^EV, and the component shown (0 global, 1 direct, 2 indirect).
     float exposure_scale;
     uint shown;
+    // ANALYTIC only: the trained point light's intensity (W/sr, rgb); for a spot light its axis
+    // (xyz) and the cosines of its inner (w) and outer cone angles, else an axis of 0.
+    vec4 light_intensity;
+    vec4 spot_axis;
+    float spot_cos_outer;
 } constants;
 
 #include "network_inputs.glsl"
 #include "specialized_networks.glsl"
+#include "analytic_direct.glsl"
 #ifdef DISPLAY
 #include "tonemap.glsl"
 #endif
@@ -60,18 +73,28 @@ void main() {
     float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
     float direct_sums[HIDDEN1];
     float indirect_sums[HIDDEN1];
-    direct_surface(x, direct_sums);
+    if (!ANALYTIC) {
+        direct_surface(x, direct_sums);
+    }
     indirect_surface(x, indirect_sums);
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
     for (uint l = 0u; l < constants.light_count; ++l) {
         vec3 light = lights[l].position.xyz;
-        direct += direct_lit(direct_sums, light) * lights[l].scale.rgb;
+        if (!ANALYTIC) {
+            direct += direct_lit(direct_sums, light) * lights[l].scale.rgb;
+        }
         indirect += indirect_lit(indirect_sums, light) * lights[l].scale.rgb;
     }
     vec3 reflectance = surface_reflectance(id, shading);
     direct *= reflectance;
     indirect *= reflectance;
+    if (ANALYTIC) {
+        vec3 p = vec3(x[0], x[1], x[2]);
+        vec3 wo = vec3(x[3], x[4], x[5]);
+        vec3 n = vec3(x[9], x[10], x[11]);
+        direct = analytic_direct(p, n, wo, shading, materials[id_material(id)].w);
+    }
 #ifdef DISPLAY
     vec3 shown = constants.shown == 1u ? direct
                : constants.shown == 2u ? indirect

@@ -14,7 +14,7 @@ use serde_json::json;
 
 use super::variant::VariantArg;
 use crate::frame_stats::{median, Stats};
-use crate::gpu_frame::{FrameOutput, FrameSettings, GpuFrame, Shown, TIMESTAMPS};
+use crate::gpu_frame::{Direct, FrameOutput, FrameSettings, GpuFrame, Shown, TIMESTAMPS};
 
 /// Frames run before timing starts.
 const WARM_UP: usize = 2;
@@ -81,6 +81,11 @@ pub struct BenchArgs {
     /// (the walkthrough's frame), `both` times each.
     #[arg(long, value_enum, default_value_t = OutputArg::Both)]
     pub output: OutputArg,
+    /// Where direct light comes from: `learned` (the direct networks; any light) or
+    /// `analytic` (computed from the BRDF for a point or spot light, with cube shadow maps;
+    /// tiled and per-object variants only).
+    #[arg(long, value_enum, default_value_t = Direct::Learned)]
+    pub direct: Direct,
     /// Numbers of lights to time, e.g. 1,2,4: copies of the moving light spread through its
     /// box (each 1 to 16). With two or more, the cost of each extra light is printed.
     #[arg(long, default_value = "1", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=16))]
@@ -98,6 +103,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
     let model = Model::load(&args.model.clone().unwrap_or_else(|| scene.model_file()), Some(&scene))?;
     let view = super::view_args::named_view(&scene, args.view.as_deref())?;
+    args.direct.check(&scene)?;
     // Timing runs without the validation layer unless RRF_VALIDATION asks for it.
     let mut options = ContextOptions::from_env();
     if std::env::var_os("RRF_VALIDATION").is_none() {
@@ -157,7 +163,7 @@ impl Bench<'_> {
     ) -> Result<serde_json::Value> {
         let (ctx, scene, model, args) = (self.ctx, self.scene, self.model, self.args);
         let setup = Instant::now();
-        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, output)?;
+        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, output, args.direct)?;
         let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
         let settings =
             FrameSettings { view: view.clone(), lights: lights.to_vec(), exposure_scale: 1.0, shown: Shown::Gi };
@@ -187,6 +193,7 @@ impl Bench<'_> {
             "width": width,
             "height": height,
             "lights": lights.len(),
+            "direct": format!("{:?}", args.direct).to_lowercase(),
             "frames": args.frames,
             "setup_ms": setup_ms,
             "gbuffer_ms": median(gbuffer),

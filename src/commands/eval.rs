@@ -20,7 +20,7 @@ use crate::eval::figure::{compose, Panel};
 use crate::eval::metrics::{compare, Baselines, Metrics};
 use crate::eval::reference_cache::{default_cache_dir, reference};
 use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, ConfigReport, Report};
-use crate::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
+use crate::gpu_frame::{rgb, Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use crate::image_out::tonemap_rgb8;
 use crate::progress::Progress;
 
@@ -63,6 +63,11 @@ pub struct EvalArgs {
     /// Where to cache the references; default: .cache/references/ in the scene's folder.
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
+    /// Where direct light comes from: `learned` (the direct networks; any light) or
+    /// `analytic` (computed from the BRDF for a point or spot light, with cube shadow maps;
+    /// tiled and per-object variants only).
+    #[arg(long, value_enum, default_value_t = Direct::Learned)]
+    pub direct: Direct,
     /// Output folder: metrics.json, index.html and one PNG per configuration.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -72,14 +77,20 @@ pub struct EvalArgs {
 /// CPU inference.
 enum Predictor {
     Gpu(Box<(Context, GpuFrame)>),
-    Cpu,
+    /// The CPU inference, with direct light from where it says.
+    Cpu(Direct),
 }
 
 /// The Vulkan context and the one frame every configuration renders with.
-fn gpu_predictor(scene: &Scene, model: &Model, width: u32, height: u32) -> Result<Box<(Context, GpuFrame)>> {
+fn gpu_predictor(
+    scene: &Scene,
+    model: &Model,
+    (width, height): (u32, u32),
+    direct: Direct,
+) -> Result<Box<(Context, GpuFrame)>> {
     let ctx = Context::new(&ContextOptions::from_env())?;
     let extent = vk::Extent2D { width, height };
-    let frame = GpuFrame::new(&ctx, scene, model, Variant::Tiled, extent, FrameOutput::Radiance)?;
+    let frame = GpuFrame::new(&ctx, scene, model, Variant::Tiled, extent, FrameOutput::Radiance, direct)?;
     Ok(Box::new((ctx, frame)))
 }
 
@@ -90,22 +101,28 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let model = Model::load(&model_path, Some(&scene))?;
     let geometry = Geometry::new(&scene);
     let configs = held_out(&scene, &geometry, args.configs as usize, args.seed)?;
+    args.direct.check(&scene)?;
     std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create {}", args.output.display()))?;
 
     let predictor = if args.cpu {
-        Predictor::Cpu
+        Predictor::Cpu(args.direct)
     } else {
-        match gpu_predictor(&scene, &model, width, height) {
+        match gpu_predictor(&scene, &model, (width, height), args.direct) {
             Ok(gpu) => Predictor::Gpu(gpu),
             Err(e) => {
                 eprintln!("warning: no Vulkan device ({e}); predicting with the CPU inference");
-                Predictor::Cpu
+                Predictor::Cpu(args.direct)
             }
         }
     };
     let predictions = match &predictor {
-        Predictor::Gpu(gpu) => format!("{} (Vulkan, {} network pass)", gpu.0.info.name, Variant::Tiled.name()),
-        Predictor::Cpu => "the CPU reference inference".to_string(),
+        Predictor::Gpu(gpu) => format!(
+            "{} (Vulkan, {} network pass, {} direct light)",
+            gpu.0.info.name,
+            Variant::Tiled.name(),
+            args.direct.name()
+        ),
+        Predictor::Cpu(direct) => format!("the CPU reference inference ({} direct light)", direct.name()),
     };
     let cache = args.cache.clone().unwrap_or_else(|| default_cache_dir(&scene));
     let settings = RenderSettings {
@@ -283,10 +300,10 @@ fn predict(
     height: u32,
 ) -> Result<Predicted> {
     match predictor {
-        Predictor::Cpu => {
+        Predictor::Cpu(direct) => {
             let world = World::new(scene, geometry, Some(config.light));
             let camera = Camera::new(&config.view, width as f32 / height as f32);
-            let image = predict_image(&world, &camera, model, width, height);
+            let image = predict_image(&world, &camera, model, (width, height), (*direct).into());
             Ok(Predicted {
                 direct: image.component(|r| r.direct),
                 indirect: image.component(|r| r.indirect),

@@ -15,7 +15,7 @@ use rrf_renderer::{vk, Context, ContextOptions};
 use super::bake::model_to_render;
 use super::variant::VariantArg;
 use super::view_args::{Component, ViewArgs};
-use crate::gpu_frame::{rgb, FrameOutput, FrameSettings, GpuFrame, Shown};
+use crate::gpu_frame::{rgb, Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use crate::image_out::{check_output, write_image};
 
 #[derive(Args, Debug)]
@@ -27,6 +27,11 @@ pub struct RenderArgs {
     /// Which light to show.
     #[arg(long, value_enum, default_value_t = Component::Gi)]
     pub component: Component,
+    /// Where direct light comes from: `learned` (the direct networks; any light) or
+    /// `analytic` (computed from the BRDF for a point or spot light, with cube shadow maps;
+    /// tiled and per-object variants only).
+    #[arg(long, value_enum, default_value_t = Direct::Learned)]
+    pub direct: Direct,
     /// How the networks reach the shader (GPU only).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
     pub variant: VariantArg,
@@ -46,15 +51,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let model = model_to_render(&scene, args.model.as_deref())?;
     let view = args.view.resolve_view(&scene)?;
     let lights = args.view.lights(&scene)?;
+    args.direct.check(&scene)?;
     let start = Instant::now();
     let (pixels, how) = if args.cpu {
         let geometry = Geometry::new(&scene);
         let world = World::with_lights(&scene, &geometry, &lights);
         let camera = Camera::new(&view, width as f32 / height as f32);
-        let image = predict_image(&world, &camera, &model, width, height);
+        let image = predict_image(&world, &camera, &model, (width, height), args.direct.into());
         (image.component(|r| args.component.pick(r)), "CPU inference".to_string())
     } else {
-        gpu_render(&scene, &model, args.variant, &view, lights, (width, height), args.component)?
+        let target = GpuTarget { variant: args.variant, direct: args.direct, size: (width, height) };
+        gpu_render(&scene, &model, &target, &view, lights, args.component)?
     };
     let seconds = start.elapsed().as_secs_f64();
     write_image(&args.output, width, height, &pixels, args.view.exposure)?;
@@ -62,19 +69,26 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// How a frame is made on the Vulkan device, and its size.
+struct GpuTarget {
+    variant: VariantArg,
+    direct: Direct,
+    size: (u32, u32),
+}
+
 /// Renders on the Vulkan device; returns the pixels and which device did it.
 fn gpu_render(
     scene: &Scene,
     model: &Model,
-    variant: VariantArg,
+    target: &GpuTarget,
     view: &View,
     lights: Vec<PlacedLight>,
-    (width, height): (u32, u32),
     component: Component,
 ) -> Result<(Vec<Vec3>, String)> {
+    let (variant, (width, height)) = (target.variant, target.size);
     let ctx = Context::new(&ContextOptions::from_env())?;
     let extent = vk::Extent2D { width, height };
-    let frame = GpuFrame::new(&ctx, scene, model, variant.0, extent, FrameOutput::Radiance)?;
+    let frame = GpuFrame::new(&ctx, scene, model, variant.0, extent, FrameOutput::Radiance, target.direct)?;
     let settings = FrameSettings { view: view.clone(), lights, exposure_scale: 1.0, shown: Shown::Gi };
     let rendered = frame.render(&ctx, &settings);
     frame.destroy(&ctx);

@@ -10,6 +10,7 @@ use rrf_renderer::{swapchain, vk, Context, ContextOptions};
 use super::bake::model_to_render;
 use super::variant::VariantArg;
 use super::view_args::{named_view, parse_size};
+use crate::gpu_frame::Direct;
 use crate::viewer::renderer::Renderer;
 use crate::viewer::script::Script;
 use crate::viewer::state::ViewerState;
@@ -50,6 +51,11 @@ pub struct ViewArgs {
     /// Window size (or frame size when headless) in pixels, each side 1 to 16384.
     #[arg(long, default_value = "960x540", value_name = "WxH")]
     pub size: String,
+    /// Where direct light comes from: `learned` (the direct networks; any light) or
+    /// `analytic` (computed from the BRDF for a point or spot light, with cube shadow maps;
+    /// tiled and per-object variants only).
+    #[arg(long, value_enum, default_value_t = Direct::Learned)]
+    pub direct: Direct,
     /// How the networks reach the shader (see `rrf render --help`).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
     pub variant: VariantArg,
@@ -123,6 +129,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let model = model_to_render(&scene, args.model.as_deref())?;
     let view = named_view(&scene, args.view.as_deref())?;
     let lights = crate::lights::lights_from_args(&scene, &args.light)?;
+    args.direct.check(&scene)?;
     let mut state = ViewerState::new(&scene, view, lights);
     state.overlay = !args.no_overlay;
     if let Some(dir) = &args.record {
@@ -166,7 +173,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let ctx = Context::new(&options).context("cannot start Vulkan (`rrf info` says more)")?;
     let extent = vk::Extent2D { width: size.0, height: size.1 };
     let started = std::time::Instant::now();
-    let mut renderer = Renderer::new(ctx, &scene, &model, args.variant.0, extent)?;
+    let mut renderer = Renderer::new(ctx, &scene, &model, (args.variant.0, args.direct), extent)?;
     eprintln!(
         "{} on {} ({} network pass, pipelines ready in {:.1} s)",
         scene.name,

@@ -17,7 +17,7 @@ use rrf_renderer::{vk, Context, Image};
 
 use super::state::ViewerState;
 use crate::frame_stats::Stats;
-use crate::gpu_frame::{FrameOutput, GpuFrame, TIMESTAMPS};
+use crate::gpu_frame::{Direct, FrameOutput, GpuFrame, TIMESTAMPS};
 use rrf_baker::atomic_file::write_atomically;
 
 /// A window's surface and its swapchain, remade when the window's size changes.
@@ -58,8 +58,14 @@ pub struct Renderer {
 
 impl Renderer {
     /// The frame for `scene` at `extent`, with frames in flight.
-    pub fn new(ctx: Context, scene: &Scene, model: &Model, variant: Variant, extent: vk::Extent2D) -> Result<Self> {
-        let frame = ctx.guard(GpuFrame::new(&ctx, scene, model, variant, extent, FrameOutput::Display)?);
+    pub fn new(
+        ctx: Context,
+        scene: &Scene,
+        model: &Model,
+        (variant, direct): (Variant, Direct),
+        extent: vk::Extent2D,
+    ) -> Result<Self> {
+        let frame = ctx.guard(GpuFrame::new(&ctx, scene, model, variant, extent, FrameOutput::Display, direct)?);
         let ring = FrameLoop::new(&ctx, TIMESTAMPS)?;
         let frame = frame.keep();
         let period_ns = ctx.info.limits.timestamp_period_ns.map(f64::from);

@@ -97,6 +97,34 @@ pub fn offset_origin(si: &Interaction, dir: Vec3) -> Vec3 {
     si.position + si.geometric_normal * (eps * side)
 }
 
+/// The light of the world's point lights that leaves `si` towards `wo_local` (in `frame`, the
+/// shading frame) after one bounce: next-event estimation of every point light, which has no
+/// noise (a delta), with a shadow ray each. The analytic direct light of
+/// `predict::predict_image` is this at the primary hit.
+pub fn point_lights_at(world: &World, si: &Interaction, frame: &Frame, wo_local: Vec3) -> Vec3 {
+    let mut sum = Vec3::ZERO;
+    for light in &world.point_lights {
+        let to_light = light.position - si.position;
+        let distance2 = to_light.length_squared();
+        let distance = distance2.sqrt();
+        let direction = to_light / distance;
+        let spot = light.cone.map_or(1.0, |cone| cone.attenuation(-direction));
+        if direction.dot(si.geometric_normal) <= 0.0 || spot == 0.0 {
+            continue;
+        }
+        let wi = frame.to_local(direction);
+        let f = si.bsdf.eval(wo_local, wi);
+        if f == Vec3::ZERO {
+            continue;
+        }
+        let origin = offset_origin(si, direction);
+        if !world.occluded(origin, direction, distance * (1.0 - 1e-4)) {
+            sum += f * light.intensity * (spot * wi.z / distance2);
+        }
+    }
+    sum
+}
+
 /// Radiance along a camera ray: emitted, direct and indirect at its first hit.
 pub fn trace_ray(world: &World, origin: Vec3, dir: Vec3, settings: &TraceSettings, rng: &mut Rng) -> Radiance {
     match world.intersect(origin, dir) {
@@ -148,25 +176,7 @@ pub fn radiance_leaving(
                 }
             }
         }
-        for light in &world.point_lights {
-            let to_light = light.position - si.position;
-            let distance2 = to_light.length_squared();
-            let distance = distance2.sqrt();
-            let direction = to_light / distance;
-            let spot = light.cone.map_or(1.0, |cone| cone.attenuation(-direction));
-            if direction.dot(si.geometric_normal) <= 0.0 || spot == 0.0 {
-                continue;
-            }
-            let wi = frame.to_local(direction);
-            let f = si.bsdf.eval(wo_local, wi);
-            if f == Vec3::ZERO {
-                continue;
-            }
-            let origin = offset_origin(si, direction);
-            if !world.occluded(origin, direction, distance * (1.0 - 1e-4)) {
-                out.add(segments + 1, beta * f * light.intensity * (spot * wi.z / distance2));
-            }
-        }
+        out.add(segments + 1, beta * point_lights_at(world, si, &frame, wo_local));
 
         // Continue the path by sampling the BSDF.
         let Some(sample) = si.bsdf.sample(wo_local, rng.next_f32(), rng.next_vec2()) else {
