@@ -176,9 +176,10 @@ fn network_layout_glsl() -> String {
 /// fully unrolled: glslang accepts no array built from specialization constants, and the
 /// driver folds the weights into the code when it creates the pipeline.
 ///
-/// Each network is two functions, so that several lights share the per-pixel work:
-/// `NAME_surface(x, s)` sums the first layer over every input but the light position, and
-/// `NAME_lit(s, light)` adds the light position's share and runs the rest of the network.
+/// Each network is `NAME_network(x)`, the whole network for one light, and a split form for
+/// several lights, so that they share the per-pixel work: `NAME_surface(x, s)` sums the
+/// first layer over every input but the light position, and `NAME_lit(s, light)` adds the
+/// light position's share and runs the rest of the network.
 ///
 /// Constant ids follow the parameter layout of `network.rs` (w1 [20][13], b1, w2 [10][20],
 /// b2, w3 [3][10], b3), the direct network's from `FIRST_PARAMETER_ID`, then the indirect's.
@@ -214,6 +215,23 @@ fn specialized_networks_glsl() -> String {
             sum
         };
         let function = prefix.to_lowercase();
+        let x: Vec<String> = (0..INPUTS).map(|i| format!("x[{i}]")).collect();
+        let h1: Vec<String> = (0..HIDDEN1).map(|j| format!("h1_{j}")).collect();
+        let h2: Vec<String> = (0..HIDDEN2).map(|k| format!("h2_{k}")).collect();
+        // The second and third layers, shared by both forms of the network.
+        let tail = |s: &mut String| {
+            for k in 0..HIDDEN2 {
+                let _ = writeln!(s, "    float h2_{k} = network_tanh({});", dot("2", k, &h1));
+            }
+            let outputs: Vec<String> = (0..OUTPUTS).map(|c| dot("3", c, &h2)).collect();
+            let _ = writeln!(s, "    return vec3({});\n}}", outputs.join(",\n                "));
+        };
+        // The whole network on inputs `x`.
+        let _ = writeln!(s, "\nvec3 {function}_network(float x[{INPUTS}]) {{");
+        for j in 0..HIDDEN1 {
+            let _ = writeln!(s, "    float h1_{j} = network_tanh({});", dot("1", j, &x));
+        }
+        tail(&mut s);
         // First layer, part 1: the bias and the inputs other than the light position, once
         // per pixel. Part 2 adds the light position's share, once per light.
         let is_light = |column: usize| (LIGHT_INPUT..LIGHT_INPUT + 3).contains(&column);
@@ -233,13 +251,7 @@ fn specialized_networks_glsl() -> String {
             }
             let _ = writeln!(s, "    float h1_{j} = network_tanh({sum});");
         }
-        let h1: Vec<String> = (0..HIDDEN1).map(|j| format!("h1_{j}")).collect();
-        for k in 0..HIDDEN2 {
-            let _ = writeln!(s, "    float h2_{k} = network_tanh({});", dot("2", k, &h1));
-        }
-        let h2: Vec<String> = (0..HIDDEN2).map(|k| format!("h2_{k}")).collect();
-        let outputs: Vec<String> = (0..OUTPUTS).map(|c| dot("3", c, &h2)).collect();
-        let _ = writeln!(s, "    return vec3({});\n}}", outputs.join(",\n                "));
+        tail(&mut s);
     }
     s
 }

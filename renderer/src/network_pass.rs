@@ -129,12 +129,14 @@ fn fold(params: &[f32], input_min: &[f32; INPUTS], input_max: &[f32; INPUTS], ou
     out
 }
 
-/// Specialization constants of object `id`'s pipeline (see `network_specialized.comp`).
-fn specialization(id: usize, n: &ObjectNetworks, tiled: bool, analytic: bool) -> Specialization {
+/// Specialization constants of object `id`'s pipeline for frames of one light or of
+/// `several` (see `network_specialized_main.glsl`).
+fn specialization(id: usize, n: &ObjectNetworks, tiled: bool, analytic: bool, several: bool) -> Specialization {
     let mut words = vec![0u32; FIRST_PARAMETER_ID + 2 * PARAMETERS];
     words[0] = id as u32 + 1;
     words[1] = u32::from(tiled);
     words[2] = u32::from(analytic);
+    words[3] = u32::from(several);
     let direct = fold(n.direct, &n.input_min, &n.input_max, n.direct_scale);
     let indirect = fold(n.indirect, &n.input_min, &n.input_max, n.indirect_scale);
     for (word, value) in words[FIRST_PARAMETER_ID..].iter_mut().zip(direct.iter().chain(&indirect)) {
@@ -352,7 +354,8 @@ enum Kind {
 
 struct Specialized {
     classify: ComputePass,
-    /// One pipeline per object with networks, in the order of `objects`.
+    /// Two pipelines per object with networks, in the order of `objects`: for frames of one
+    /// light, then of several.
     networks: ComputePass,
     /// Object id of each pipeline.
     objects: Vec<usize>,
@@ -752,7 +755,10 @@ fn specialized(
     for (id, object) in objects.iter().enumerate() {
         if let Some(n) = object {
             n.check(id)?;
-            specializations.push(specialization(id, n, tiled, matches!(direct, DirectLight::Analytic { .. })));
+            let analytic = matches!(direct, DirectLight::Analytic { .. });
+            for several in [false, true] {
+                specializations.push(specialization(id, n, tiled, analytic, several));
+            }
             trained_ids.push(id);
         }
     }
@@ -840,13 +846,14 @@ impl Specialized {
             spot_cos_outer: spot.cos_outer,
             pad: [0; 3],
         };
+        let several = usize::from(c.light_count > 1);
         for (index, &id) in self.objects.iter().enumerate() {
             let dispatch = if self.tiled {
                 Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * id as u64 }
             } else {
                 Dispatch::Covering { width: extent.width, height: extent.height }
             };
-            self.networks.record_pipeline(ctx, cmd, index, bytemuck::bytes_of(&push), dispatch);
+            self.networks.record_pipeline(ctx, cmd, 2 * index + several, bytemuck::bytes_of(&push), dispatch);
         }
     }
 }

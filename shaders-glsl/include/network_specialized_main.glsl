@@ -20,6 +20,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(constant_id = 0) const uint OBJECT = 1u;
 layout(constant_id = 1) const bool TILED = true;
 layout(constant_id = 2) const bool ANALYTIC = false;
+// Whether the frame has more than one light: a pipeline of each kind, because lavapipe runs
+// the networks about 50% slower inside a loop, even one that runs once, and most frames have
+// one light (BENCHMARKS.md, "Several lights").
+layout(constant_id = 3) const bool SEVERAL_LIGHTS = false;
 
 // Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
 layout(binding = 5) readonly buffer Tiles { uint tiles[]; };
@@ -71,20 +75,31 @@ void main() {
     }
     Shading shading = pixel_shading(pixel);
     float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
-    float direct_sums[HIDDEN1];
-    float indirect_sums[HIDDEN1];
-    if (!ANALYTIC) {
-        direct_surface(x, direct_sums);
-    }
-    indirect_surface(x, indirect_sums);
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
-    for (uint l = 0u; l < constants.light_count; ++l) {
-        vec3 light = lights[l].position.xyz;
-        if (!ANALYTIC) {
-            direct += direct_lit(direct_sums, light) * lights[l].scale.rgb;
+    if (!SEVERAL_LIGHTS) {
+        for (int i = 0; i < 3; ++i) {
+            x[LIGHT_INPUT + i] = lights[0].position[i];
         }
-        indirect += indirect_lit(indirect_sums, light) * lights[l].scale.rgb;
+        if (!ANALYTIC) {
+            direct = direct_network(x) * lights[0].scale.rgb;
+        }
+        indirect = indirect_network(x) * lights[0].scale.rgb;
+    } else {
+        // The lights share the first layer's per-pixel part.
+        float direct_sums[HIDDEN1];
+        float indirect_sums[HIDDEN1];
+        if (!ANALYTIC) {
+            direct_surface(x, direct_sums);
+        }
+        indirect_surface(x, indirect_sums);
+        for (uint l = 0u; l < constants.light_count; ++l) {
+            vec3 light = lights[l].position.xyz;
+            if (!ANALYTIC) {
+                direct += direct_lit(direct_sums, light) * lights[l].scale.rgb;
+            }
+            indirect += indirect_lit(indirect_sums, light) * lights[l].scale.rgb;
+        }
     }
     vec3 reflectance = surface_reflectance(id, shading);
     direct *= reflectance;

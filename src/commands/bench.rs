@@ -178,7 +178,9 @@ impl Bench<'_> {
         // Networks evaluated per frame: two per pixel of an object that has them.
         let trained: Vec<bool> =
             scene.objects.iter().map(|o| model.network(&o.name, Component::Direct).is_some()).collect();
-        let evaluations = 2 * objects.iter().filter(|&&id| id > 0 && trained[id as usize - 1]).count();
+        // Analytic direct light computes direct light instead of evaluating its network.
+        let per_pixel = if args.direct == Direct::Analytic { 1 } else { 2 };
+        let evaluations = per_pixel * objects.iter().filter(|&&id| id > 0 && trained[id as usize - 1]).count();
         let network_ms = median(network);
         let per_s = evaluations as f64 / (network_ms * 1e-3);
         let gflops = per_s * 2.0 * multiply_adds(lights.len()) * 1e-9;
