@@ -9,6 +9,11 @@
 //!   other objects' pixels.
 //! - [`Variant::Tiled`]: the same pipelines, each dispatched indirectly over only the 8×8
 //!   tiles that its object covers, as `network_classify.comp` sorted them.
+//!
+//! Every variant sums the networks over the frame's lights ([`NetworkLight`], copies of the
+//! moving light), read from a small buffer written at the start of each frame. The specialized
+//! variants can also compute direct light instead of learning it ([`DirectLight::Analytic`]),
+//! with shadow maps from [`crate::shadow`].
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
