@@ -26,19 +26,25 @@ use crate::gpu_scene::{
 };
 use crate::shaders;
 
-/// Each object's networks, by object id; `None` for objects the model has none for.
-pub fn object_networks<'a>(scene: &Scene, model: &'a Model) -> Vec<Option<ObjectNetworks<'a>>> {
+/// Each object's networks, by object id; `None` for objects the model has none for. With
+/// analytic direct light only the indirect network is needed: where the model has no direct
+/// network, the indirect one stands in for it (the pass never evaluates it).
+pub fn object_networks<'a>(scene: &Scene, model: &'a Model, direct: Direct) -> Vec<Option<ObjectNetworks<'a>>> {
     scene
         .objects
         .iter()
         .map(|o| {
-            let direct = model.network(&o.name, Component::Direct)?;
             let indirect = model.network(&o.name, Component::Indirect)?;
+            let direct = match (model.network(&o.name, Component::Direct), direct) {
+                (Some(n), _) => n,
+                (None, Direct::Analytic) => indirect,
+                (None, Direct::Learned) => return None,
+            };
             Some(ObjectNetworks {
                 direct: &direct.params,
                 indirect: &indirect.params,
-                input_min: direct.input_min,
-                input_max: direct.input_max,
+                input_min: indirect.input_min,
+                input_max: indirect.input_max,
                 direct_scale: direct.output_scale,
                 indirect_scale: indirect.output_scale,
             })
@@ -197,7 +203,7 @@ impl GpuFrame {
             classify_display: shaders::NETWORK_CLASSIFY_DISPLAY_COMP,
             specialized_display: shaders::NETWORK_DISPLAY_COMP,
         };
-        let objects = object_networks(scene, model);
+        let objects = object_networks(scene, model, direct);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
         let display = (output == FrameOutput::Display && variant != Variant::Storage).then_some(&*ldr);
         let materials = network_materials(scene);

@@ -9,6 +9,7 @@ use common::{finish_clean, gpu};
 use rrf::gpu_frame::{Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
+use rrf_baker::network::Component;
 use rrf_baker::predict::predict_image;
 use rrf_baker::scene::{PlacedLight, Scene};
 use rrf_baker::trace::{Camera, Geometry, Radiance, World};
@@ -147,6 +148,37 @@ fn analytic_direct_matches_the_cpu_many_objects() {
     ];
     let variants = [Variant::Tiled, Variant::PerObject];
     compare_with("many-objects", "table", &lights, (120, 80), Direct::Analytic, &variants, 0.95);
+}
+
+/// Analytic direct light needs only the indirect networks: a model without its direct
+/// networks renders the same frame.
+#[test]
+fn analytic_direct_needs_no_direct_networks() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/many-objects");
+    let scene = Scene::load(&dir).unwrap();
+    let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
+    let mut indirect_only = model.clone();
+    indirect_only.networks.retain(|n| n.component == Component::Indirect);
+    assert!(indirect_only.networks.len() * 2 == model.networks.len());
+    let ctx = gpu();
+    let extent = vk::Extent2D { width: 64, height: 48 };
+    let settings = FrameSettings {
+        view: scene.view("table").unwrap().clone(),
+        lights: vec![scene.default_light()],
+        exposure_scale: 1.0,
+        shown: Shown::Gi,
+    };
+    let render = |model: &Model| {
+        let frame = GpuFrame::new(&ctx, &scene, model, Variant::Tiled, extent, FrameOutput::Radiance, Direct::Analytic)
+            .unwrap();
+        let pixels = frame.render(&ctx, &settings).unwrap();
+        frame.destroy(&ctx);
+        pixels.gi
+    };
+    let (full, stripped) = (render(&model), render(&indirect_only));
+    finish_clean(ctx);
+    assert!(full.iter().any(|&v| v > 0.0));
+    assert!(full == stripped, "the direct networks changed an analytic frame");
 }
 
 /// Textured surfaces, whose networks' output the G-buffer's reflectance multiplies, a normal
