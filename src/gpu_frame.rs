@@ -116,13 +116,34 @@ pub enum Direct {
 }
 
 impl Direct {
-    /// Whether `scene` can be rendered this way: analytic direct light needs the scene's only
+    /// Whether `scene` can be lit this way: analytic direct light needs the scene's only
     /// light to be its moving point or spot light.
-    pub fn check(self, scene: &Scene) -> Result<()> {
+    pub fn check_scene(self, scene: &Scene) -> Result<()> {
         match self {
             Direct::Learned => Ok(()),
             Direct::Analytic => analytic_light(scene).map(|_| ()),
         }
+    }
+
+    /// Whether `scene` can be rendered this way with `model`: [`Direct::check_scene`], and
+    /// learned direct light needs the direct networks, which a bake for analytic direct light
+    /// leaves out.
+    pub fn check(self, scene: &Scene, model: &Model) -> Result<()> {
+        self.check_scene(scene)?;
+        let indirect_only = || {
+            model
+                .networks
+                .iter()
+                .any(|n| n.component == Component::Indirect && model.network(&n.object, Component::Direct).is_none())
+        };
+        if self == Direct::Learned && indirect_only() {
+            anyhow::bail!(
+                "the model of {} has no direct networks (it was baked with --direct analytic): render with \
+                 --direct analytic, or bake again without it",
+                scene.name
+            );
+        }
+        Ok(())
     }
 
     pub fn name(self) -> &'static str {

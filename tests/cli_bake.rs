@@ -57,3 +57,38 @@ fn bake_then_render_on_the_cpu() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("re-bake"));
 }
+
+/// `rrf bake --direct analytic` trains the indirect networks only; the model renders with
+/// `--direct analytic` and refuses learned direct light with the reason. An area light
+/// cannot be baked this way.
+#[test]
+fn a_bake_for_analytic_direct_light_trains_the_indirect_networks_only() {
+    let dir = std::env::temp_dir().join(format!("rrf-cli-bake-analytic-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("model.safetensors");
+    let model_arg = model.to_str().unwrap();
+    let bake = |scene: &str| {
+        rrf(&["bake", scene, "--quality", "test", "--direct", "analytic", "--json", "-o", model_arg], &[])
+    };
+    let out = bake("scenes/many-objects");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let networks = report["networks"].as_array().unwrap();
+    assert!(networks.len() >= 10 && networks.iter().all(|n| n["component"] == "indirect"), "{report}");
+
+    let png = dir.join("frame.png");
+    let render = |direct: &str| {
+        let args = ["render", "scenes/many-objects", "--model", model_arg, "--direct", direct, "--size", "32x24"];
+        rrf(&[&args[..], &["-o", png.to_str().unwrap()]].concat(), &[("RRF_VALIDATION", "required")])
+    };
+    let analytic = render("analytic");
+    assert!(analytic.status.success(), "{}", String::from_utf8_lossy(&analytic.stderr));
+    let learned = render("learned");
+    let stderr = String::from_utf8_lossy(&learned.stderr);
+    assert!(!learned.status.success() && stderr.contains("no direct networks"), "{stderr}");
+
+    let area = bake("scenes/cornell-box");
+    let stderr = String::from_utf8_lossy(&area.stderr);
+    assert!(!area.status.success() && stderr.contains("moving area light"), "{stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}

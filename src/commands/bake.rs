@@ -1,15 +1,17 @@
-//! `rrf bake`: training samples from the path tracer, then two networks per object.
+//! `rrf bake`: training samples from the path tracer, then two networks per object (only the
+//! indirect one for `--direct analytic`).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use rrf_baker::bake::lock::BakeLock;
-use rrf_baker::bake::{bake_part, BakeProgress, BakeReport, BakeSettings, Part, Quality, Stage};
+use rrf_baker::bake::{bake_part, BakeProgress, BakeReport, BakeSettings, Part, Quality, Stage, Trained};
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
 use serde_json::json;
 
+use crate::gpu_frame::Direct;
 use crate::progress::Progress;
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -46,6 +48,12 @@ pub struct BakeArgs {
     /// Print one line of JSON with the figures of the bake.
     #[arg(long)]
     pub json: bool,
+    /// The direct light the model is for: `learned` trains a direct and an indirect network
+    /// per object; `analytic` trains only the indirect ones (half the training), for
+    /// rendering with `--direct analytic` (a moving point or spot light only). Give the same
+    /// value to every stage of a split bake.
+    #[arg(long, value_enum, default_value_t = Direct::Learned)]
+    pub direct: Direct,
     /// Run one stage of a bake split across processes or machines (a cluster's array jobs):
     /// `sample`, then `aim`, then `train`, each needing every shard of the stages before, then
     /// --merge. Needs --shard. Every process uses the same bake cache (MODEL.bake-cache/, on a
@@ -178,7 +186,11 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         QualityArg::Preview => Quality::Preview,
         QualityArg::Final => Quality::Final,
     };
-    let settings = BakeSettings::new(quality, args.seed, &scene);
+    let mut settings = BakeSettings::new(quality, args.seed, &scene);
+    if args.direct == Direct::Analytic {
+        args.direct.check_scene(&scene)?;
+        settings.trained = Trained::IndirectOnly;
+    }
     let output = args.output.clone().unwrap_or_else(|| scene.model_file());
     check_output(&output)?;
     let cache = output.with_extension("bake-cache");

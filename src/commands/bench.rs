@@ -103,7 +103,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let scene = Scene::load(&args.scene)?;
     let model = Model::load(&args.model.clone().unwrap_or_else(|| scene.model_file()), Some(&scene))?;
     let view = super::view_args::named_view(&scene, args.view.as_deref())?;
-    args.direct.check(&scene)?;
+    args.direct.check(&scene, &model)?;
     // Timing runs without the validation layer unless RRF_VALIDATION asks for it.
     let mut options = ContextOptions::from_env();
     if std::env::var_os("RRF_VALIDATION").is_none() {

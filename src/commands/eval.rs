@@ -101,7 +101,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let model = Model::load(&model_path, Some(&scene))?;
     let geometry = Geometry::new(&scene);
     let configs = held_out(&scene, &geometry, args.configs as usize, args.seed)?;
-    args.direct.check(&scene)?;
+    args.direct.check(&scene, &model)?;
     std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create {}", args.output.display()))?;
 
     let predictor = if args.cpu {

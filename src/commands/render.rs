@@ -51,7 +51,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let model = model_to_render(&scene, args.model.as_deref())?;
     let view = args.view.resolve_view(&scene)?;
     let lights = args.view.lights(&scene)?;
-    args.direct.check(&scene)?;
+    args.direct.check(&scene, &model)?;
     let start = Instant::now();
     let (pixels, how) = if args.cpu {
         let geometry = Geometry::new(&scene);

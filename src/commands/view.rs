@@ -129,7 +129,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let model = model_to_render(&scene, args.model.as_deref())?;
     let view = named_view(&scene, args.view.as_deref())?;
     let lights = crate::lights::lights_from_args(&scene, &args.light)?;
-    args.direct.check(&scene)?;
+    args.direct.check(&scene, &model)?;
     let mut state = ViewerState::new(&scene, view, lights);
     state.overlay = !args.no_overlay;
     if let Some(dir) = &args.record {

@@ -46,6 +46,29 @@ pub enum Quality {
     Final,
 }
 
+/// Which networks a bake trains.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Trained {
+    /// A direct and an indirect network per object: for every renderer mode.
+    #[default]
+    Both,
+    /// The indirect networks only, for analytic direct light (`--direct analytic`), which
+    /// computes direct light instead of learning it: half the training.
+    IndirectOnly,
+}
+
+impl Trained {
+    fn is_both(&self) -> bool {
+        *self == Trained::Both
+    }
+
+    /// Whether networks of `component` are trained.
+    pub fn trains(self, component: Component) -> bool {
+        self == Trained::Both || component == Component::Indirect
+    }
+}
+
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct BakeSettings {
     pub quality: Quality,
@@ -63,6 +86,10 @@ pub struct BakeSettings {
     pub validation_fraction: f32,
     /// Configurations per shard file.
     pub shard_configurations: u32,
+    /// Which networks to train. Written to the model and the cache keys only when not both,
+    /// so that bakes of both keep the bytes they had before this setting existed.
+    #[serde(skip_serializing_if = "Trained::is_both")]
+    pub trained: Trained,
 }
 
 impl BakeSettings {
@@ -81,6 +108,7 @@ impl BakeSettings {
                 min_samples: 100,
                 validation_fraction: 0.2,
                 shard_configurations: 4,
+                trained: Trained::Both,
             },
             Quality::Preview => BakeSettings {
                 quality,
@@ -94,6 +122,7 @@ impl BakeSettings {
                 min_samples: 200,
                 validation_fraction: 0.15,
                 shard_configurations: 8,
+                trained: Trained::Both,
             },
             Quality::Final => BakeSettings {
                 quality,
@@ -107,6 +136,7 @@ impl BakeSettings {
                 min_samples: 400,
                 validation_fraction: 0.15,
                 shard_configurations: 8,
+                trained: Trained::Both,
             },
         };
         let overrides = match quality {
@@ -399,7 +429,7 @@ pub fn bake_part(
     report.samples = all.len();
     report.paths = all.len() as u64 * u64::from(settings.paths_per_sample);
 
-    // Training: two networks per object that has samples.
+    // Training: two networks per object that has samples (one with `Trained::IndirectOnly`).
     let start = Instant::now();
     let mut by_object: Vec<Vec<&Sample>> = vec![Vec::new(); scene.objects.len()];
     for s in &all {
@@ -425,7 +455,7 @@ pub fn bake_part(
             });
             continue;
         }
-        for component in Component::ALL {
+        for component in Component::ALL.into_iter().filter(|&c| settings.trained.trains(c)) {
             jobs.push((object.id, component));
         }
     }
