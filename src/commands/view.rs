@@ -132,6 +132,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     args.direct.check(&scene, &model)?;
     let mut state = ViewerState::new(&scene, view, lights);
     state.overlay = !args.no_overlay;
+    state.direct = args.direct;
     if let Some(dir) = &args.record {
         std::fs::create_dir_all(dir).with_context(|| format!("--record: cannot create {}", dir.display()))?;
     }

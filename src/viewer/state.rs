@@ -10,7 +10,7 @@ use rrf_renderer::overlay::{Colour, TextGrid};
 use super::script::Action;
 use crate::commands::view_args::MAX_EXPOSURE;
 use crate::frame_stats::Stats;
-use crate::gpu_frame::{FrameSettings, Shown, TIMED_PASSES};
+use crate::gpu_frame::{Direct, FrameSettings, Shown, TIMED_PASSES};
 use crate::lights::{fixed_lights, MAX_INTENSITY, MAX_LIGHTS};
 
 /// Keys that act for as long as they are held.
@@ -73,6 +73,8 @@ pub struct ViewerState {
     pub exposure: f32,
     pub overlay: bool,
     pub help: bool,
+    /// Where direct light comes from, for the overlay.
+    pub direct: Direct,
     camera_tween: Option<Tween>,
     light_tween: Option<Tween>,
 }
@@ -107,6 +109,7 @@ impl ViewerState {
             exposure: 0.0,
             overlay: true,
             help: true,
+            direct: Direct::Learned,
             camera_tween: None,
             light_tween: None,
             home: view,
@@ -361,7 +364,15 @@ impl ViewerState {
             format!("camera {:.2},{:.2},{:.2}{note}", e.x, e.y, e.z),
             if outside { Colour::Yellow } else { Colour::White },
         ));
-        lines.push((format!("showing {}  exposure {:+.1} EV", self.shown.name(), self.exposure), Colour::Blue));
+        lines.push((
+            format!(
+                "showing {}  exposure {:+.1} EV  direct light {}",
+                self.shown.name(),
+                self.exposure,
+                self.direct.name()
+            ),
+            Colour::Blue,
+        ));
         if self.help {
             lines.push((String::new(), Colour::White));
             lines.extend(HELP.iter().map(|h| (h.to_string(), Colour::White)));
