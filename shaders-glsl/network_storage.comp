@@ -8,6 +8,10 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+// Whether the frame has more than one light: a pipeline of each kind, as in
+// network_specialized_main.glsl.
+layout(constant_id = 0) const bool SEVERAL_LIGHTS = false;
+
 // Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
 layout(binding = 5) readonly buffer Weights { float weights[]; };
 layout(binding = 6, rgba32f) uniform writeonly image2D out_direct;
@@ -41,18 +45,27 @@ void main() {
             for (int i = 0; i < INPUTS; ++i) {
                 x[i] = normalize_input(raw[i], weights[ranges + i], weights[ranges + INPUTS + i]);
             }
-            float direct_sums[HIDDEN1];
-            float indirect_sums[HIDDEN1];
-            forward_surface(base, x, direct_sums);
-            forward_surface(base + PARAMETERS, x, indirect_sums);
-            for (uint l = 0u; l < constants.light_count; ++l) {
-                vec3 light;
+            if (!SEVERAL_LIGHTS) {
                 for (int i = 0; i < 3; ++i) {
                     uint r = ranges + LIGHT_INPUT + i;
-                    light[i] = normalize_input(lights[l].position[i], weights[r], weights[r + INPUTS]);
+                    x[LIGHT_INPUT + i] = normalize_input(lights[0].position[i], weights[r], weights[r + INPUTS]);
                 }
-                direct += forward_lit(base, direct_sums, light) * lights[l].scale.rgb;
-                indirect += forward_lit(base + PARAMETERS, indirect_sums, light) * lights[l].scale.rgb;
+                direct = forward(base, x) * lights[0].scale.rgb;
+                indirect = forward(base + PARAMETERS, x) * lights[0].scale.rgb;
+            } else {
+                float direct_sums[HIDDEN1];
+                float indirect_sums[HIDDEN1];
+                forward_surface(base, x, direct_sums);
+                forward_surface(base + PARAMETERS, x, indirect_sums);
+                for (uint l = 0u; l < constants.light_count; ++l) {
+                    vec3 light;
+                    for (int i = 0; i < 3; ++i) {
+                        uint r = ranges + LIGHT_INPUT + i;
+                        light[i] = normalize_input(lights[l].position[i], weights[r], weights[r + INPUTS]);
+                    }
+                    direct += forward_lit(base, direct_sums, light) * lights[l].scale.rgb;
+                    indirect += forward_lit(base + PARAMETERS, indirect_sums, light) * lights[l].scale.rgb;
+                }
             }
             vec3 reflectance = surface_reflectance(id, shading);
             direct *= weights[ranges + 2 * INPUTS] * reflectance;

@@ -548,7 +548,10 @@ impl NetworkPass {
                 uses.extend(writes);
                 let push = StoragePush { eye: c.eye, light_count: c.light_count, pad: [0; 3] };
                 passes.push(Pass::new("network (storage buffer)", uses, move |cmd| {
-                    pass.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
+                    // Pipeline 1 is for frames of several lights (SEVERAL_LIGHTS).
+                    let pipeline = usize::from(c.light_count > 1);
+                    let dispatch = Dispatch::Covering { width: extent.width, height: extent.height };
+                    pass.record_pipeline(ctx, cmd, pipeline, bytemuck::bytes_of(&push), dispatch)
                 }));
             }
             Kind::Specialized(s) => {
@@ -713,7 +716,10 @@ fn storage(
     )?);
     let bindings = network_bindings(gbuffer, shared, &weights, Written::Radiance(outputs), None);
     let push = std::mem::size_of::<StoragePush>() as u32;
-    let pass = ComputePass::new(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE))?;
+    // One pipeline for frames of one light, one for several (`SEVERAL_LIGHTS`).
+    let lights = [vec![0], vec![1]];
+    let pass =
+        ComputePass::specialized(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE), &lights)?;
     Ok(Kind::Storage { pass, weights: weights.keep() })
 }
 

@@ -14,29 +14,11 @@ float normalize_input(float x, float lo, float hi) {
     return range > 1e-6 ? 2.0 * (x - lo) / range - 1.0 : 0.0;
 }
 
-// First layer, part 1: the bias plus the weighted inputs other than the light position
-// (normalised `x`), once per pixel; `forward_lit` adds the light's share once per light.
-void forward_surface(uint base, float x[INPUTS], out float s[HIDDEN1]) {
-    for (int j = 0; j < HIDDEN1; ++j) {
-        float sum = weights[base + B1 + j];
-        for (int i = 0; i < INPUTS; ++i) {
-            if (i < LIGHT_INPUT || i >= LIGHT_INPUT + 3) {
-                sum += weights[base + W1 + j * INPUTS + i] * x[i];
-            }
-        }
-        s[j] = sum;
-    }
-}
-
-// The network on first-layer sums `s` and the normalised light position `light`.
-vec3 forward_lit(uint base, float s[HIDDEN1], vec3 light) {
+// The network after its first layer's sums `s` (bias plus weighted inputs).
+vec3 forward_from_sums(uint base, float s[HIDDEN1]) {
     float h1[HIDDEN1];
     for (int j = 0; j < HIDDEN1; ++j) {
-        float sum = s[j];
-        for (int i = 0; i < 3; ++i) {
-            sum += weights[base + W1 + j * INPUTS + LIGHT_INPUT + i] * light[i];
-        }
-        h1[j] = network_tanh(sum);
+        h1[j] = network_tanh(s[j]);
     }
     float h2[HIDDEN2];
     for (int k = 0; k < HIDDEN2; ++k) {
@@ -55,6 +37,46 @@ vec3 forward_lit(uint base, float s[HIDDEN1], vec3 light) {
         y[c] = sum;
     }
     return y;
+}
+
+// The network on normalised inputs `x` (one light).
+vec3 forward(uint base, float x[INPUTS]) {
+    float s[HIDDEN1];
+    for (int j = 0; j < HIDDEN1; ++j) {
+        float sum = weights[base + B1 + j];
+        for (int i = 0; i < INPUTS; ++i) {
+            sum += weights[base + W1 + j * INPUTS + i] * x[i];
+        }
+        s[j] = sum;
+    }
+    return forward_from_sums(base, s);
+}
+
+// For several lights. First layer, part 1: the bias plus the weighted inputs other than the
+// light position (normalised `x`), once per pixel; `forward_lit` adds the light's share once
+// per light.
+void forward_surface(uint base, float x[INPUTS], out float s[HIDDEN1]) {
+    for (int j = 0; j < HIDDEN1; ++j) {
+        float sum = weights[base + B1 + j];
+        for (int i = 0; i < INPUTS; ++i) {
+            if (i < LIGHT_INPUT || i >= LIGHT_INPUT + 3) {
+                sum += weights[base + W1 + j * INPUTS + i] * x[i];
+            }
+        }
+        s[j] = sum;
+    }
+}
+
+// The network on first-layer sums `s` and the normalised light position `light`.
+vec3 forward_lit(uint base, float s[HIDDEN1], vec3 light) {
+    float lit[HIDDEN1];
+    for (int j = 0; j < HIDDEN1; ++j) {
+        lit[j] = s[j];
+        for (int i = 0; i < 3; ++i) {
+            lit[j] += weights[base + W1 + j * INPUTS + LIGHT_INPUT + i] * light[i];
+        }
+    }
+    return forward_from_sums(base, lit);
 }
 
 #endif
