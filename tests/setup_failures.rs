@@ -14,7 +14,11 @@ use rrf_renderer::network_pass::Variant;
 use rrf_renderer::vk;
 
 fn cornell_box() -> (Scene, Model) {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box");
+    shipped("cornell-box")
+}
+
+fn shipped(name: &str) -> (Scene, Model) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
     let scene = Scene::load(&dir).unwrap();
     let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
     (scene, model)
@@ -24,13 +28,20 @@ const EXTENT: vk::Extent2D = vk::Extent2D { width: 48, height: 32 };
 
 #[test]
 fn a_frame_that_fails_at_any_set_up_step_leaves_nothing_behind() {
-    let (scene, model) = cornell_box();
-    for variant in [Variant::Tiled, Variant::Storage] {
+    let (cornell, cornell_model) = cornell_box();
+    // many-objects' point light allows analytic direct light: the shadow pass's set-up too.
+    let (many, many_model) = shipped("many-objects");
+    let cases = [
+        (&cornell, &cornell_model, Variant::Tiled, Direct::Learned),
+        (&cornell, &cornell_model, Variant::Storage, Direct::Learned),
+        (&many, &many_model, Variant::Tiled, Direct::Analytic),
+    ];
+    for (scene, model, variant, direct) in cases {
         let mut step = 0;
         loop {
             let ctx = gpu();
             ctx.fail_at_step(Some(ctx.steps_taken() + step));
-            match GpuFrame::new(&ctx, &scene, &model, variant, EXTENT, FrameOutput::Radiance, Direct::Learned) {
+            match GpuFrame::new(&ctx, scene, model, variant, EXTENT, FrameOutput::Radiance, direct) {
                 Ok(frame) => {
                     frame.destroy(&ctx);
                     finish_clean(ctx);
@@ -44,7 +55,7 @@ fn a_frame_that_fails_at_any_set_up_step_leaves_nothing_behind() {
                 }
             }
         }
-        eprintln!("{}: set-up failed cleanly at each of its {step} steps", variant.name());
+        eprintln!("{} ({:?}): set-up failed cleanly at each of its {step} steps", variant.name(), direct);
         assert!(step >= 15, "{}: only {step} steps were tried", variant.name());
     }
 }
