@@ -122,6 +122,8 @@ impl<'a> World<'a> {
             }
             let uvs = info.vertices.map(|v| geometry.uvs[v as usize]);
             let texture = material.emissive_texture;
+            // The same for every copy: a copy moves the triangle, not its UVs.
+            let share = texture.map_or(1.0, |t| textured_share(scene, t, uvs));
             let copies = if info.moving { lights.len() } else { 1 };
             for copy in 0..copies {
                 let corners = geometry.corners(id as u32, offsets[copy]);
@@ -132,7 +134,6 @@ impl<'a> World<'a> {
                     break;
                 }
                 let emission = material.emission * if info.moving { lights[copy].scale } else { Vec3::ONE };
-                let power = luminance(emission) * area * texture.map_or(1.0, |t| textured_share(scene, t, uvs));
                 if copy == 0 {
                     emitter_of_triangle[id] = emitters.len() as u32;
                 }
@@ -144,7 +145,7 @@ impl<'a> World<'a> {
                     texture,
                     double_sided: material.double_sided,
                     area,
-                    probability: power,
+                    probability: luminance(emission) * area * share,
                 });
             }
         }
