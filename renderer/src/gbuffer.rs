@@ -153,7 +153,8 @@ pub struct LightCopy {
 pub const SURFACE_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 pub const ID_FORMAT: vk::Format = vk::Format::R32_UINT;
 pub const SHADING_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
-const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// The depth buffer of the passes that rasterise the mesh (G-buffer, shadow maps).
+pub(crate) const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 
 /// The G-buffer's images, in `GENERAL` layout between passes.
 pub struct GBufferTargets {
@@ -220,7 +221,7 @@ impl Destroy for GBufferTargets {
 pub struct GBufferMesh {
     /// The vertices, then the triangles' indices from `index_offset`.
     pub(crate) buffer: Buffer,
-    pub(crate) index_offset: u64,
+    index_offset: u64,
     /// One [`SurfaceMaterial`] per material.
     materials: Buffer,
     /// Every texture's RGBA8 texels, one word each.
@@ -364,6 +365,15 @@ impl GBufferMesh {
         })
     }
 
+    /// Binds the vertex and index buffers for drawing `draws`.
+    pub(crate) fn bind(&self, ctx: &Context, cmd: vk::CommandBuffer) {
+        // SAFETY: `cmd` is recording; the buffer belongs to this device and outlives the frame.
+        unsafe {
+            ctx.device.cmd_bind_vertex_buffers(cmd, 0, &[self.buffer.raw], &[0]);
+            ctx.device.cmd_bind_index_buffer(cmd, self.buffer.raw, self.index_offset, vk::IndexType::UINT32);
+        }
+    }
+
     pub fn destroy(self, ctx: &Context) {
         for buffer in [self.buffer, self.materials, self.texels] {
             ctx.destroy_buffer(buffer);
@@ -491,12 +501,7 @@ impl GBufferPass {
                     .clear_value(zero)
             })
             .collect();
-        let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(targets.depth.view)
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::DONT_CARE)
-            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+        let depth = cleared_depth(&targets.depth);
         let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: targets.extent };
         let info = vk::RenderingInfo::default()
             .render_area(area)
@@ -520,8 +525,7 @@ impl GBufferPass {
             if let Some(set) = &self.set {
                 device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[set.set], &[]);
             }
-            device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.buffer.raw], &[0]);
-            device.cmd_bind_index_buffer(cmd, mesh.buffer.raw, mesh.index_offset, vk::IndexType::UINT32);
+            mesh.bind(ctx, cmd);
             // The scene, then each copy of the moving light with its own offset and scale.
             let still = std::iter::once((*camera, false));
             let copies = lights.iter().map(|l| {
@@ -568,6 +572,17 @@ impl Destroy for GBufferPass {
         }
         self.set.destroy(ctx);
     }
+}
+
+/// The depth attachment of a pass that rasterises the mesh: `depth` ([`DEPTH_FORMAT`]),
+/// cleared to the far plane, not stored.
+pub(crate) fn cleared_depth(depth: &Image) -> vk::RenderingAttachmentInfo<'static> {
+    vk::RenderingAttachmentInfo::default()
+        .image_view(depth.view)
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::DONT_CARE)
+        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } })
 }
 
 /// A graphics pipeline that rasterises the scene mesh ([`GBufferVertex`]) with depth testing,

@@ -10,7 +10,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::context::Context;
 use crate::error::{Result, VkContext};
-use crate::gbuffer::{GBufferMesh, Raster};
+use crate::gbuffer::{cleared_depth, GBufferMesh, Raster, DEPTH_FORMAT};
 use crate::guard::Destroy;
 use crate::network_pass::MAX_LIGHTS;
 use crate::resources::Image;
@@ -19,7 +19,6 @@ use crate::sync::{Access, Pass, ResourceStates, Use};
 /// Texels per side of a cube face (`SHADOW_SIZE` in `shadow_cube.glsl`).
 pub const SHADOW_SIZE: u32 = 256;
 const ATLAS_FORMAT: vk::Format = vk::Format::R32_SFLOAT;
-const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// What a face texel holds where nothing was drawn: farther than anything.
 const NOTHING: f32 = 1e30;
 
@@ -124,12 +123,7 @@ impl ShadowPass {
             .load_op(vk::AttachmentLoadOp::CLEAR)
             .store_op(vk::AttachmentStoreOp::STORE)
             .clear_value(vk::ClearValue { color: vk::ClearColorValue { float32: [NOTHING; 4] } })];
-        let depth = vk::RenderingAttachmentInfo::default()
-            .image_view(self.depth.view)
-            .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-            .load_op(vk::AttachmentLoadOp::CLEAR)
-            .store_op(vk::AttachmentStoreOp::DONT_CARE)
-            .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } });
+        let depth = cleared_depth(&self.depth);
         let info = vk::RenderingInfo::default()
             .render_area(area)
             .layer_count(1)
@@ -139,8 +133,7 @@ impl ShadowPass {
         unsafe {
             device.cmd_begin_rendering(cmd, &info);
             device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
-            device.cmd_bind_vertex_buffers(cmd, 0, &[mesh.buffer.raw], &[0]);
-            device.cmd_bind_index_buffer(cmd, mesh.buffer.raw, mesh.index_offset, vk::IndexType::UINT32);
+            mesh.bind(ctx, cmd);
             for (row, light) in lights.iter().take(rows as usize).enumerate() {
                 for face in 0..6u32 {
                     let (x, y) = (face * SHADOW_SIZE, row as u32 * SHADOW_SIZE);
