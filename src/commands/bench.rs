@@ -81,10 +81,7 @@ pub struct BenchArgs {
     /// (the walkthrough's frame), `both` times each.
     #[arg(long, value_enum, default_value_t = OutputArg::Both)]
     pub output: OutputArg,
-    /// Where direct light comes from: `learned` (the direct networks; any light) or
-    /// `analytic` (computed from the BRDF for a point or spot light, with cube shadow maps;
-    /// tiled and per-object variants only).
-    #[arg(long, value_enum, default_value_t = Direct::Learned)]
+    #[arg(long, value_enum, default_value_t = Direct::Learned, help = super::DIRECT_HELP)]
     pub direct: Direct,
     /// Numbers of lights to time, e.g. 1,2,4: copies of the moving light spread through its
     /// box (each 1 to 16). With two or more, the cost of each extra light is printed.

@@ -63,10 +63,7 @@ pub struct EvalArgs {
     /// Where to cache the references; default: .cache/references/ in the scene's folder.
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
-    /// Where direct light comes from: `learned` (the direct networks; any light) or
-    /// `analytic` (computed from the BRDF for a point or spot light, with cube shadow maps;
-    /// tiled and per-object variants only).
-    #[arg(long, value_enum, default_value_t = Direct::Learned)]
+    #[arg(long, value_enum, default_value_t = Direct::Learned, help = super::DIRECT_HELP)]
     pub direct: Direct,
     /// Output folder: metrics.json, index.html and one PNG per configuration.
     #[arg(short, long)]

@@ -19,3 +19,8 @@ X.safetensors beside any other X.gltf or X.glb (where `rrf bake` writes it)";
 pub const SCENE_HELP: &str = "Scene: a folder holding scene.gltf or scene.glb, or a .gltf or .glb file. \
 Its sidecar (light and camera boxes, views, bake settings) is the glTF's name with .toml: scene.toml, or \
 MyScene.toml beside MyScene.glb";
+
+/// The --direct flag of the commands that render from a model.
+pub const DIRECT_HELP: &str = "Where direct light comes from: `learned` (the direct networks; any light) or \
+`analytic` (computed from the BRDF for a point or spot light, with cube shadow maps; tiled and per-object variants \
+only)";

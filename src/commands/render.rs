@@ -27,10 +27,7 @@ pub struct RenderArgs {
     /// Which light to show.
     #[arg(long, value_enum, default_value_t = Component::Gi)]
     pub component: Component,
-    /// Where direct light comes from: `learned` (the direct networks; any light) or
-    /// `analytic` (computed from the BRDF for a point or spot light, with cube shadow maps;
-    /// tiled and per-object variants only).
-    #[arg(long, value_enum, default_value_t = Direct::Learned)]
+    #[arg(long, value_enum, default_value_t = Direct::Learned, help = super::DIRECT_HELP)]
     pub direct: Direct,
     /// How the networks reach the shader (GPU only).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]

@@ -51,10 +51,7 @@ pub struct ViewArgs {
     /// Window size (or frame size when headless) in pixels, each side 1 to 16384.
     #[arg(long, default_value = "960x540", value_name = "WxH")]
     pub size: String,
-    /// Where direct light comes from: `learned` (the direct networks; any light) or
-    /// `analytic` (computed from the BRDF for a point or spot light, with cube shadow maps;
-    /// tiled and per-object variants only).
-    #[arg(long, value_enum, default_value_t = Direct::Learned)]
+    #[arg(long, value_enum, default_value_t = Direct::Learned, help = super::DIRECT_HELP)]
     pub direct: Direct,
     /// How the networks reach the shader (see `rrf render --help`).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
