@@ -148,7 +148,12 @@ impl ViewerState {
 
     /// Moves the selected light to `p`, or as near as its trained box allows.
     fn set_light(&mut self, p: Vec3) {
-        let light = &mut self.lights[self.selected];
+        self.place_light(self.selected, p);
+    }
+
+    /// Moves light `index` to `p`, or as near as its trained box allows.
+    fn place_light(&mut self, index: usize, p: Vec3) {
+        let light = &mut self.lights[index];
         match &self.light_box {
             Some(b) => {
                 let clamped = p.clamp(b.min, b.max);
@@ -242,11 +247,11 @@ impl ViewerState {
         let home = self.home.clone();
         self.set_camera(home.eye, home.target);
         self.lights = self.home_lights.clone();
-        for i in 0..self.lights.len() {
-            self.selected = i;
-            self.set_light(self.lights[i].position);
-        }
         self.selected = 0;
+        // The selected light last, so that the overlay's edge warning is its own.
+        for i in (0..self.lights.len()).rev() {
+            self.place_light(i, self.lights[i].position);
+        }
         self.camera_tween = None;
         self.light_tween = None;
     }
