@@ -30,6 +30,22 @@ fn rrf_in_xvfb(args: &[&str]) -> std::process::Output {
     xvfb.unwrap_or_else(|e| panic!("cannot run xvfb-run ({e}); install Xvfb with `cargo xtask setup`"))
 }
 
+/// Asserts that the viewer's screenshot `shot` shows the frame that `rrf render` makes of the
+/// Cornell box with `args` at `(width, height)`: at most 1% of the pixels more than 2 levels
+/// off, and a mean difference under half a level.
+fn assert_same_as_render(shot: &Path, args: &[&str], (width, height): (u32, u32)) {
+    let reference = temp(&format!("render-{}", shot.file_name().unwrap().to_string_lossy()));
+    let size = format!("{width}x{height}");
+    let common = ["render", "scenes/cornell-box", "--size", &size, "-o", reference.to_str().unwrap()];
+    let render = rrf(&[&common[..], args].concat(), &[("RRF_VALIDATION", "required")]);
+    assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
+    let (off, mean) = difference(&load(shot), &load(&reference), 2);
+    eprintln!("{off} pixels differ by more than 2 levels; mean {mean:.3}");
+    assert!(off * 100 <= (width * height) as usize, "{off} pixels differ from rrf render by more than 2 levels");
+    assert!(mean < 0.5, "mean difference {mean:.3} levels");
+    let _ = std::fs::remove_file(reference);
+}
+
 #[test]
 fn scripted_window_run_is_clean_and_matches_render() {
     let shot = temp("window.png");
@@ -69,31 +85,10 @@ fn scripted_window_run_is_clean_and_matches_render() {
     assert_eq!(stats["frames"], 31, "0.5 s of script time at 60 frames per second, plus the last frame");
     assert!(stats["gpu_ms"]["network_ms"].as_f64().unwrap() > 0.0);
 
-    let reference = temp("render.png");
     let camera = format!("{eye}:{target}");
-    let render = rrf(
-        &[
-            "render",
-            "scenes/cornell-box",
-            "--camera",
-            &camera,
-            "--light",
-            light,
-            "--size",
-            "200x150",
-            "-o",
-            reference.to_str().unwrap(),
-        ],
-        &[("RRF_VALIDATION", "required")],
-    );
-    assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
-    let (viewer, rendered) = (load(&shot), load(&reference));
-    assert_eq!(viewer.dimensions(), (200, 150), "the screenshot has the size the script asked for");
-    let (off, mean) = difference(&viewer, &rendered, 2);
-    eprintln!("{off} pixels differ by more than 2 levels; mean {mean:.3}");
-    assert!(off * 100 <= (200 * 150), "{off} pixels differ from rrf render by more than 2 levels");
-    assert!(mean < 0.5, "mean difference {mean:.3} levels");
-    for f in [shot, script, reference] {
+    assert_eq!(load(&shot).dimensions(), (200, 150), "the screenshot has the size the script asked for");
+    assert_same_as_render(&shot, &["--camera", &camera, "--light", light], (200, 150));
+    for f in [shot, script] {
         let _ = std::fs::remove_file(f);
     }
 }
@@ -132,26 +127,9 @@ fn scripted_light_edits_match_render_with_the_same_lights() {
         &[("RRF_VALIDATION", "required")],
     );
     assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    let reference = temp("lights-render.png");
-    let render = rrf(
-        &[
-            "render",
-            "scenes/cornell-box",
-            "--light",
-            "0.36,0.45,0.38:color=1,0.5,0.2",
-            "--light",
-            "0.3,0.5,0.3:color=0.3,0.5,1:intensity=2",
-            "--size",
-            "96x96",
-            "-o",
-            reference.to_str().unwrap(),
-        ],
-        &[("RRF_VALIDATION", "required")],
-    );
-    assert!(render.status.success(), "{}", String::from_utf8_lossy(&render.stderr));
-    let (off, mean) = difference(&load(&shot), &load(&reference), 2);
-    assert!(off * 100 <= 96 * 96 && mean < 0.5, "{off} pixels differ by more than 2 levels; mean {mean:.3}");
-    for f in [shot, script, reference] {
+    let lights = ["--light", "0.36,0.45,0.38:color=1,0.5,0.2", "--light", "0.3,0.5,0.3:color=0.3,0.5,1:intensity=2"];
+    assert_same_as_render(&shot, &lights, (96, 96));
+    for f in [shot, script] {
         let _ = std::fs::remove_file(f);
     }
 }
