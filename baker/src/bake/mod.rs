@@ -513,7 +513,9 @@ pub fn bake_part(
             progress.trained(d, mine.len() as u64);
             Ok((network, info))
         })
-        .collect::<Result<_, BakeError>>()?;
+        .collect::<Vec<_>>()
+        .into_iter()
+        .collect::<Result<_, BakeError>>()?; // the first error in job order, the same on every run
     report.train_seconds = start.elapsed().as_secs_f64();
     report.resumed_networks = resumed_networks.into_inner();
     report.networks = networks.len();
@@ -624,7 +626,9 @@ impl Shards<'_> {
                 cache::write(&path, SHARD_MAGIC, key.0, &samples::encode(&samples))?;
                 Ok((samples, false))
             })
-            .collect::<Result<_, BakeError>>()?;
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect::<Result<_, BakeError>>()?; // the first error in shard order, the same on every run
         let resumed = shards.iter().filter(|(_, resumed)| *resumed).count();
         let count = shards.len();
         Ok(Sampled { samples: shards.into_iter().flat_map(|(s, _)| s).collect(), resumed, shards: count })
