@@ -1,10 +1,11 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
 // Network pass, weights in a storage buffer: per pixel, the 13 inputs from the G-buffer and
-// the constants, then that object's direct and indirect networks, summed over the lights.
+// the constants, then the direct and indirect networks of the pixel's unit (network_units.glsl),
+// summed over the lights.
 //
-// Per object slot (object id), OBJECT_STRIDE floats: direct parameters, indirect parameters,
-// input_min[13], input_max[13], direct output scale, indirect output scale, present (1 or 0).
+// Per unit, UNIT_STRIDE floats: the direct parameters, then the indirect parameters, each with
+// the input normalisation and the output scale folded in.
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -21,9 +22,12 @@ layout(binding = 8, rgba32f) uniform writeonly image2D out_gi;
 layout(push_constant) uniform Constants {
     vec4 eye;
     uint light_count;
+    uint objects;
 } constants;
 
 #include "network.glsl"
+#define UNITS_BINDING 9
+#include "network_units.glsl"
 
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
@@ -37,18 +41,13 @@ void main() {
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
     if (object > 0u) {
-        uint base = (object - 1u) * OBJECT_STRIDE;
-        uint ranges = base + 2 * PARAMETERS;
-        if (weights[ranges + 2 * INPUTS + 2] > 0.5) {
-            float raw[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
-            float x[INPUTS];
-            for (int i = 0; i < INPUTS; ++i) {
-                x[i] = normalize_input(raw[i], weights[ranges + i], weights[ranges + INPUTS + i]);
-            }
+        float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
+        int unit = find_unit(object - 1u, vec3(x[0], x[1], x[2]));
+        if (unit >= 0) {
+            uint base = uint(unit) * UNIT_STRIDE;
             if (!SEVERAL_LIGHTS) {
                 for (int i = 0; i < 3; ++i) {
-                    uint r = ranges + LIGHT_INPUT + i;
-                    x[LIGHT_INPUT + i] = normalize_input(lights[0].position[i], weights[r], weights[r + INPUTS]);
+                    x[LIGHT_INPUT + i] = lights[0].position[i];
                 }
                 direct = forward(base, x) * lights[0].scale.rgb;
                 indirect = forward(base + PARAMETERS, x) * lights[0].scale.rgb;
@@ -58,18 +57,14 @@ void main() {
                 forward_surface(base, x, direct_sums);
                 forward_surface(base + PARAMETERS, x, indirect_sums);
                 for (uint l = 0u; l < constants.light_count; ++l) {
-                    vec3 light;
-                    for (int i = 0; i < 3; ++i) {
-                        uint r = ranges + LIGHT_INPUT + i;
-                        light[i] = normalize_input(lights[l].position[i], weights[r], weights[r + INPUTS]);
-                    }
+                    vec3 light = lights[l].position.xyz;
                     direct += forward_lit(base, direct_sums, light) * lights[l].scale.rgb;
                     indirect += forward_lit(base + PARAMETERS, indirect_sums, light) * lights[l].scale.rgb;
                 }
             }
             vec3 reflectance = surface_reflectance(id, shading);
-            direct *= weights[ranges + 2 * INPUTS] * reflectance;
-            indirect *= weights[ranges + 2 * INPUTS + 1] * reflectance;
+            direct *= reflectance;
+            indirect *= reflectance;
         }
     }
     imageStore(out_direct, pixel, vec4(direct, 1.0));

@@ -10,10 +10,12 @@ use std::cell::RefCell;
 use anyhow::Result;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
-use rrf_baker::network::Component;
+use rrf_baker::network::{Component, Network};
 use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
-use rrf_renderer::network_pass::{DirectLight, NetworkConstants, NetworkPass, NetworkShaders, ObjectNetworks, Variant};
+use rrf_renderer::network_pass::{
+    DirectLight, NetworkConstants, NetworkPass, NetworkShaders, NetworkUnit, NetworkWeights, Variant,
+};
 use rrf_renderer::overlay::{OverlayPass, TextGrid};
 use rrf_renderer::resources::read_back_passes;
 use rrf_renderer::sync::{run_passes, Pass, Resource, ResourceStates};
@@ -26,30 +28,37 @@ use crate::gpu_scene::{
 };
 use crate::shaders;
 
-/// Each object's networks, by object id; `None` for objects the model has none for. With
-/// analytic direct light only the indirect network is needed: where the model has no direct
-/// network, the indirect one stands in for it (the pass never evaluates it).
-pub fn object_networks<'a>(scene: &Scene, model: &'a Model, direct: Direct) -> Vec<Option<ObjectNetworks<'a>>> {
-    scene
-        .objects
-        .iter()
-        .map(|o| {
-            let indirect = model.network(&o.name, Component::Indirect)?;
-            let direct = match (model.network(&o.name, Component::Direct), direct) {
-                (Some(n), _) => n,
-                (None, Direct::Analytic) => indirect,
-                (None, Direct::Learned) => return None,
-            };
-            Some(ObjectNetworks {
-                direct: &direct.params,
-                indirect: &indirect.params,
-                input_min: indirect.input_min,
-                input_max: indirect.input_max,
-                direct_scale: direct.output_scale,
-                indirect_scale: indirect.output_scale,
-            })
-        })
-        .collect()
+/// The network units of the scene's objects: per object, where one of its direct networks'
+/// regions meets one of its indirect networks' (one unit for an object that was not split).
+/// Objects without networks get none. With analytic direct light only the indirect networks
+/// are needed, and they stand in for the direct ones (the pass never evaluates them).
+pub fn network_units<'a>(scene: &Scene, model: &'a Model, direct: Direct) -> Vec<NetworkUnit<'a>> {
+    let weights = |n: &'a Network| NetworkWeights {
+        params: &n.params,
+        input_min: n.input_min,
+        input_max: n.input_max,
+        output_scale: n.output_scale,
+    };
+    let mut units = Vec::new();
+    for (id, o) in scene.objects.iter().enumerate() {
+        let indirect = model.networks(&o.name, Component::Indirect);
+        let direct = match direct {
+            Direct::Learned => model.networks(&o.name, Component::Direct),
+            Direct::Analytic => indirect.clone(),
+        };
+        for d in &direct {
+            for i in &indirect {
+                let (d_min, d_max) = d.region.bounds();
+                let (i_min, i_max) = i.region.bounds();
+                let min = std::array::from_fn(|a| d_min[a].max(i_min[a]));
+                let max = std::array::from_fn(|a| d_max[a].min(i_max[a]));
+                if (0..3).all(|a| min[a] < max[a]) {
+                    units.push(NetworkUnit { object: id, min, max, direct: weights(d), indirect: weights(i) });
+                }
+            }
+        }
+    }
+    units
 }
 
 /// The RGB of read-back RGBA pixels.
@@ -134,7 +143,7 @@ impl Direct {
             model
                 .networks
                 .iter()
-                .any(|n| n.component == Component::Indirect && model.network(&n.object, Component::Direct).is_none())
+                .any(|n| n.component == Component::Indirect && !model.has(&n.object, Component::Direct))
         };
         if self == Direct::Learned && indirect_only() {
             anyhow::bail!(
@@ -224,7 +233,7 @@ impl GpuFrame {
             classify_display: shaders::NETWORK_CLASSIFY_DISPLAY_COMP,
             specialized_display: shaders::NETWORK_DISPLAY_COMP,
         };
-        let objects = object_networks(scene, model, direct);
+        let units = network_units(scene, model, direct);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
         let display = (output == FrameOutput::Display && variant != Variant::Storage).then_some(&*ldr);
         let materials = network_materials(scene);
@@ -241,7 +250,8 @@ impl GpuFrame {
             variant,
             &network_shaders,
             &targets,
-            &objects,
+            scene.objects.len(),
+            &units,
             &materials,
             display,
             direct,

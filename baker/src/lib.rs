@@ -7,6 +7,7 @@ pub mod fuzzing;
 pub mod hash;
 pub mod model;
 pub mod network;
+pub mod partition;
 pub mod predict;
 pub mod scene;
 pub mod trace;

@@ -2,7 +2,8 @@
 //! that records everything inference needs.
 //!
 //! Tensors, per network: `OBJECT/COMPONENT/w1` [20, 13], `b1` [20], `w2` [10, 20], `b2` [10],
-//! `w3` [3, 10], `b3` [3], all f32. The metadata key `rrf` holds [`Metadata`] as JSON: the
+//! `w3` [3, 10], `b3` [3], all f32. A network of a leaf of the object's kd-tree
+//! ([`crate::partition`]) has its region's splits in the name: `OBJECT/COMPONENT/x<0.25/w1`. The metadata key `rrf` holds [`Metadata`] as JSON: the
 //! format version, the scene's content hash, per network the input ranges and the target
 //! transform, training statistics, the bake settings, and a checksum of the tensor data.
 //! Nothing in the file depends on when or how fast it was baked (no timings, no dates), so
@@ -18,14 +19,16 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic_file::write_atomically;
 use crate::hash::Fnv64;
+use crate::partition::{is_partition, Region};
 use crate::network::{Component, Network, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
 use crate::scene::Scene;
 
-/// Version 3: the networks give radiance over the surface's reflectance
+/// Version 4: an object's component may have several networks, one per leaf of a kd-tree over
+/// position (`region` in [`NetworkInfo`], the splits in the tensor names). Version 3: the networks give radiance over the surface's reflectance
 /// ([`crate::network::reflectance`]), which the renderer multiplies back. Version 2: the scene
 /// hash covers only what shapes the samples (not the views), and no timings are recorded.
 /// Older models are refused with a message to re-bake.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 
 /// The names of the 13 inputs, in order.
 pub const INPUT_NAMES: [&str; INPUTS] = [
@@ -76,6 +79,9 @@ pub struct Metadata {
 pub struct NetworkInfo {
     pub object: String,
     pub component: Component,
+    /// The kd-tree leaf the network covers; absent when it covers the whole object.
+    #[serde(default, skip_serializing_if = "Region::is_whole")]
+    pub region: Region,
     pub input_min: Vec<f32>,
     pub input_max: Vec<f32>,
     /// `scale`: the network predicts radiance / `output_scale`.
@@ -97,6 +103,7 @@ impl NetworkInfo {
         Some(Network {
             object: self.object.clone(),
             component: self.component,
+            region: self.region.clone(),
             input_min: std::array::from_fn(|i| self.input_min[i]),
             input_max: std::array::from_fn(|i| self.input_max[i]),
             output_scale: self.output_scale,
@@ -125,13 +132,24 @@ pub struct ModelError {
     pub problem: String,
 }
 
+/// The tensor names' prefix for a network: `OBJECT/COMPONENT` and its region's splits.
+fn tensor_prefix(object: &str, component: Component, region: &Region) -> String {
+    format!("{object}/{}{}", component.name(), region.path())
+}
+
 fn tensor_bytes(network: &Network) -> Vec<u8> {
     network.params.iter().flat_map(|v| v.to_le_bytes()).collect()
 }
 
 impl Model {
-    pub fn network(&self, object: &str, component: Component) -> Option<&Network> {
-        self.networks.iter().find(|n| n.object == object && n.component == component)
+    /// Whether the model has networks for `object`'s `component`.
+    pub fn has(&self, object: &str, component: Component) -> bool {
+        self.networks.iter().any(|n| n.object == object && n.component == component)
+    }
+
+    /// The networks of `object`'s `component`: one, or one per leaf of its kd-tree.
+    pub fn networks(&self, object: &str, component: Component) -> Vec<&Network> {
+        self.networks.iter().filter(|n| n.object == object && n.component == component).collect()
     }
 
     pub fn to_bytes(&self) -> Result<Vec<u8>, String> {
@@ -147,7 +165,8 @@ impl Model {
                 let data = &bytes[offset * 4..offset * 4 + len];
                 let shape = if shape[1] == 1 { vec![shape[0]] } else { shape.to_vec() };
                 let view = TensorView::new(Dtype::F32, shape, data).map_err(|e| e.to_string())?;
-                views.push((format!("{}/{}/{name}", network.object, network.component.name()), view));
+                let prefix = tensor_prefix(&network.object, network.component, &network.region);
+                views.push((format!("{prefix}/{name}"), view));
             }
         }
         let json = serde_json::to_string(&metadata).map_err(|e| e.to_string())?;
@@ -227,8 +246,12 @@ impl Model {
         let mut networks = Vec::new();
         for info in &metadata.networks {
             let mut params = vec![0.0f32; PARAMETERS];
+            if !info.region.is_valid() {
+                return Err(format!("network {}/{}: a region's split is not on axis 0-2 at a finite position", info.object, info.component.name()));
+            }
+            let prefix = tensor_prefix(&info.object, info.component, &info.region);
             for (name, shape, offset) in TENSORS {
-                let key = format!("{}/{}/{name}", info.object, info.component.name());
+                let key = format!("{prefix}/{name}");
                 let t = tensors.tensor(&key).map_err(|_| format!("tensor {key} is missing"))?;
                 let expected: Vec<usize> = if shape[1] == 1 { vec![shape[0]] } else { shape.to_vec() };
                 if t.dtype() != Dtype::F32 || t.shape() != expected.as_slice() {
@@ -238,7 +261,7 @@ impl Model {
                     params[offset + i] = f32::from_le_bytes([chunk[0], chunk[1], chunk[2], chunk[3]]);
                 }
             }
-            let name = format!("network {}/{}", info.object, info.component.name());
+            let name = format!("network {prefix}");
             let network = info.network(params).ok_or_else(|| format!("{name}: input ranges must have 13 entries"))?;
             if info.target_transform != "scale" || !(info.output_scale.is_finite() && info.output_scale > 0.0) {
                 return Err(format!("{name}: unknown target transform"));
@@ -252,6 +275,22 @@ impl Model {
             }
             hash.write(&tensor_bytes(&network));
             networks.push(network);
+        }
+        for info in &metadata.networks {
+            let regions: Vec<&[_]> = metadata
+                .networks
+                .iter()
+                .filter(|n| n.object == info.object && n.component == info.component)
+                .map(|n| n.region.0.as_slice())
+                .collect();
+            if !is_partition(&regions) {
+                return Err(format!(
+                    "the {} networks of {}/{} are not the leaves of one kd-tree (a gap or an overlap)",
+                    regions.len(),
+                    info.object,
+                    info.component.name()
+                ));
+            }
         }
         if format!("{:016x}", hash.0) != metadata.checksum {
             return Err("corrupted: the tensor data does not match the checksum recorded when it was baked".into());

@@ -5,6 +5,8 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use crate::partition::Region;
+
 #[path = "network_layout.rs"]
 mod layout;
 pub use layout::*;
@@ -65,6 +67,8 @@ pub fn raw_inputs(position: Vec3, to_viewer: Vec3, light: Vec3, normal: Vec3, ro
 pub struct Network {
     pub object: String,
     pub component: Component,
+    /// Where on the object the network applies: a leaf of the object's kd-tree, or all of it.
+    pub region: Region,
     /// Input `i` maps `[input_min[i], input_max[i]]` to `[-1, 1]`.
     pub input_min: [f32; INPUTS],
     pub input_max: [f32; INPUTS],

@@ -31,9 +31,12 @@ pub const PARAMETERS: usize = B3 + OUTPUTS;
 /// that black surfaces do not divide by zero.
 pub const MIN_REFLECTANCE: f32 = 0.01;
 
-/// Floats per object slot of the renderer's storage variant: direct and indirect parameters,
-/// the input ranges (min, then max), two output scales, and a presence flag.
-pub const OBJECT_STRIDE: usize = 2 * PARAMETERS + 2 * INPUTS + 3;
+/// Floats per network unit (a part of an object with one direct and one indirect network) in
+/// the renderer's storage variant: the direct, then the indirect parameters, each with its input
+/// normalisation and output scale folded in.
+pub const UNIT_STRIDE: usize = 2 * PARAMETERS;
+/// Floats per unit box in the renderer's unit table (min xyz, then max xyz).
+pub const UNIT_BOX: usize = 6;
 /// Specialization constant id of the first direct parameter of the renderer's specialized
 /// variant; the indirect network's follow the direct's. Ids below it are the shader's own.
 pub const FIRST_PARAMETER_ID: usize = 16;

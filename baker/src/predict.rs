@@ -11,18 +11,25 @@ use crate::trace::integrator::point_lights_at;
 use crate::trace::sampling::Frame;
 use crate::trace::{Camera, Radiance, RadianceImage, World};
 
-/// The networks of every object, by object id; `None` for objects without one.
-pub struct ObjectNetworks<'a> {
-    pub direct: Vec<Option<&'a Network>>,
-    pub indirect: Vec<Option<&'a Network>>,
+/// The networks of every object, by object id (none for objects without networks; one per
+/// leaf of a kd-tree for split objects).
+struct ObjectNetworks<'a> {
+    direct: Vec<Vec<&'a Network>>,
+    indirect: Vec<Vec<&'a Network>>,
 }
 
 impl<'a> ObjectNetworks<'a> {
-    pub fn new(world: &World, model: &'a Model) -> Self {
-        let lookup =
-            |component| world.scene.objects.iter().map(|o| model.network(&o.name, component)).collect::<Vec<_>>();
+    fn new(world: &World, model: &'a Model) -> Self {
+        let lookup = |component| {
+            world.scene.objects.iter().map(|o| model.networks(&o.name, component)).collect::<Vec<_>>()
+        };
         ObjectNetworks { direct: lookup(Component::Direct), indirect: lookup(Component::Indirect) }
     }
+}
+
+/// The network among `networks` (an object's leaves) whose region holds `position`.
+fn leaf_at<'a>(networks: &[&'a Network], position: Vec3) -> Option<&'a Network> {
+    networks.iter().find(|n| n.region.contains(position)).copied()
 }
 
 /// Where predicted direct light comes from.
@@ -57,21 +64,21 @@ pub fn predict_image(
             let si = world.interaction(camera.eye, dir, hit);
             let object = si.object as usize;
             let r = reflectance(si.bsdf.base_color, si.bsdf.metallic, si.bsdf.specular);
-            let eval = |n: Option<&Network>| {
-                let Some(n) = n else { return Vec3::ZERO };
+            let eval = |networks: &[&Network]| {
+                let Some(n) = leaf_at(networks, si.position) else { return Vec3::ZERO };
                 let lit = |l: &PlacedLight| {
                     n.evaluate(&raw_inputs(si.position, -dir, l.position, si.shading_normal, si.roughness)) * l.scale
                 };
                 world.lights.iter().map(lit).sum::<Vec3>() * r
             };
             let direct = match direct {
-                Direct::Learned => eval(networks.direct[object]),
+                Direct::Learned => eval(&networks.direct[object]),
                 Direct::Analytic => {
                     let frame = Frame::new(si.shading_normal);
                     point_lights_at(world, &si, &frame, frame.to_local(-dir))
                 }
             };
-            Radiance { emitted: si.emission, direct, indirect: eval(networks.indirect[object]) }
+            Radiance { emitted: si.emission, direct, indirect: eval(&networks.indirect[object]) }
         })
         .collect();
     RadianceImage { width, height, pixels }

@@ -1,14 +1,17 @@
-//! The network pass: per pixel, the object's direct and indirect networks on inputs built from
-//! the G-buffer. The variants differ in how the weights reach the shader, the pass's main
-//! performance question (BENCHMARKS.md has the figures):
+//! The network pass: per pixel, the direct and indirect networks of the pixel's
+//! [`NetworkUnit`] on inputs built from the G-buffer. A unit is an object with one network of
+//! each kind, or, where the baker split an object with its kd-tree, the box of the object
+//! where one direct and one indirect leaf meet; an object's boxes partition space.
+//! The variants differ in how the weights reach the shader, the pass's main performance
+//! question (BENCHMARKS.md has the figures):
 //!
-//! - [`Variant::Storage`]: one dispatch; every object's weights in a storage buffer, indexed
-//!   by the pixel's object id (`network_storage.comp`).
-//! - [`Variant::PerObject`]: one pipeline per object with its weights as specialization
+//! - [`Variant::Storage`]: one dispatch; every unit's weights in a storage buffer, the unit
+//!   found per pixel from its object id and position (`network_storage.comp`).
+//! - [`Variant::PerObject`]: one pipeline per unit with its weights as specialization
 //!   constants (`network_specialized.comp`), each dispatched over the whole image, skipping
-//!   other objects' pixels.
+//!   other units' pixels.
 //! - [`Variant::Tiled`]: the same pipelines, each dispatched indirectly over only the 8×8
-//!   tiles that its object covers, as `network_classify.comp` sorted them.
+//!   tiles that its unit covers, as `network_classify.comp` sorted them.
 //!
 //! Every variant sums the networks over the frame's lights ([`NetworkLight`], copies of the
 //! moving light), read from a small buffer written at the start of each frame. The specialized
@@ -34,10 +37,10 @@ use crate::sync::{Access, Pass, ResourceStates, Use};
 mod layout {
     include!("../../baker/src/network_layout.rs");
 }
-use layout::{B1, FIRST_PARAMETER_ID, HIDDEN1, W3};
-pub use layout::{INPUTS, OBJECT_STRIDE, PARAMETERS};
-/// The most objects `network_classify.comp` tells apart.
-const MAX_OBJECTS: usize = 1024;
+use layout::{B1, FIRST_PARAMETER_ID, HIDDEN1, UNIT_BOX, W3};
+pub use layout::{INPUTS, PARAMETERS, UNIT_STRIDE};
+/// The most units `network_classify.comp` tells apart.
+const MAX_UNITS: usize = 1024;
 /// Pixels per side of the tiles the classify pass sorts; the workgroup size of both shaders.
 const TILE: u32 = 8;
 
@@ -71,43 +74,88 @@ pub struct NetworkShaders<'a> {
     pub specialized_display: &'a [u32],
 }
 
-/// One object's two networks, as the baker trained them.
-pub struct ObjectNetworks<'a> {
-    pub direct: &'a [f32],
-    pub indirect: &'a [f32],
+/// One network as the baker trained it.
+#[derive(Clone, Copy)]
+pub struct NetworkWeights<'a> {
+    pub params: &'a [f32],
     pub input_min: [f32; INPUTS],
     pub input_max: [f32; INPUTS],
-    pub direct_scale: f32,
-    pub indirect_scale: f32,
+    pub output_scale: f32,
 }
 
-impl ObjectNetworks<'_> {
-    fn check(&self, id: usize) -> Result<()> {
-        if self.direct.len() != PARAMETERS || self.indirect.len() != PARAMETERS {
-            return Err(Error::Invalid(format!("object {id}: a network must have {PARAMETERS} parameters")));
+impl NetworkWeights<'_> {
+    /// The network with its input normalisation and output scale folded in.
+    fn folded(&self) -> Vec<f32> {
+        fold(self.params, &self.input_min, &self.input_max, self.output_scale)
+    }
+}
+
+/// A part of an object with one direct and one indirect network: object id `object`'s surface
+/// in the half-open box `min <= p < max` (`±f32::MAX` where unbounded). The units of an
+/// object must partition space (the boxes of a kd-tree's leaves, or of two trees' leaves
+/// where they meet), so that each of its pixels is in exactly one.
+#[derive(Clone, Copy)]
+pub struct NetworkUnit<'a> {
+    pub object: usize,
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+    pub direct: NetworkWeights<'a>,
+    pub indirect: NetworkWeights<'a>,
+}
+
+impl NetworkUnit<'_> {
+    fn check(&self, objects: usize) -> Result<()> {
+        if self.direct.params.len() != PARAMETERS || self.indirect.params.len() != PARAMETERS {
+            return Err(Error::Invalid(format!(
+                "object {}: a network must have {PARAMETERS} parameters",
+                self.object
+            )));
+        }
+        if self.object >= objects {
+            return Err(Error::Invalid(format!("a network unit of object {}, of {objects} objects", self.object)));
         }
         Ok(())
     }
 }
 
-/// Packs per-object networks by object id for the storage variant; `None` for objects
-/// without networks (they get zero direct and indirect light).
-pub fn pack_weights(objects: &[Option<ObjectNetworks>]) -> Result<Vec<f32>> {
-    let mut out = vec![0.0f32; objects.len().max(1) * OBJECT_STRIDE];
-    for (id, object) in objects.iter().enumerate() {
-        let Some(n) = object else { continue };
-        n.check(id)?;
-        let slot = &mut out[id * OBJECT_STRIDE..(id + 1) * OBJECT_STRIDE];
-        slot[..PARAMETERS].copy_from_slice(n.direct);
-        slot[PARAMETERS..2 * PARAMETERS].copy_from_slice(n.indirect);
-        let ranges = &mut slot[2 * PARAMETERS..];
-        ranges[..INPUTS].copy_from_slice(&n.input_min);
-        ranges[INPUTS..2 * INPUTS].copy_from_slice(&n.input_max);
-        ranges[2 * INPUTS] = n.direct_scale;
-        ranges[2 * INPUTS + 1] = n.indirect_scale;
-        ranges[2 * INPUTS + 2] = 1.0;
+/// The units in the order the pass uses (grouped by object, which the unit table needs),
+/// checked against `objects` object ids.
+fn ordered<'a>(objects: usize, units: &[NetworkUnit<'a>]) -> Result<Vec<NetworkUnit<'a>>> {
+    units.iter().try_for_each(|u| u.check(objects))?;
+    let mut ordered = units.to_vec();
+    ordered.sort_by_key(|u| u.object);
+    Ok(ordered)
+}
+
+/// The table of `network_units.glsl` for `units` (grouped by object) of `objects` object ids:
+/// per object its first unit and unit count, then per unit its box.
+fn unit_table(objects: usize, units: &[NetworkUnit]) -> Vec<f32> {
+    let mut table = vec![0.0f32; 2 * objects.max(1)];
+    for (index, unit) in units.iter().enumerate() {
+        let entry = &mut table[2 * unit.object..2 * unit.object + 2];
+        if entry[1] == 0.0 {
+            entry[0] = index as f32;
+        }
+        entry[1] += 1.0;
     }
-    Ok(out)
+    for unit in units {
+        table.extend(unit.min.iter().chain(&unit.max));
+    }
+    debug_assert_eq!(table.len(), 2 * objects.max(1) + UNIT_BOX * units.len());
+    table
+}
+
+/// The storage variant's weights: per unit, the folded direct and indirect networks.
+fn pack_weights(units: &[NetworkUnit]) -> Vec<f32> {
+    let mut out = Vec::with_capacity(units.len().max(1) * UNIT_STRIDE);
+    for unit in units {
+        out.extend(unit.direct.folded());
+        out.extend(unit.indirect.folded());
+    }
+    if out.is_empty() {
+        out.resize(UNIT_STRIDE, 0.0); // Vulkan buffers cannot be empty
+    }
+    out
 }
 
 /// A network that takes raw inputs: the input normalisation (the baker's `normalize`, an
@@ -134,16 +182,19 @@ fn fold(params: &[f32], input_min: &[f32; INPUTS], input_max: &[f32; INPUTS], ou
     out
 }
 
-/// Specialization constants of object `id`'s pipeline for frames of one light or of
+/// Specialization constants of unit `index`'s pipeline for frames of one light or of
 /// `several` (see `network_specialized_main.glsl`).
-fn specialization(id: usize, n: &ObjectNetworks, tiled: bool, analytic: bool, several: bool) -> Specialization {
+fn specialization(index: usize, unit: &NetworkUnit, tiled: bool, analytic: bool, several: bool) -> Specialization {
     let mut words = vec![0u32; FIRST_PARAMETER_ID + 2 * PARAMETERS];
-    words[0] = id as u32 + 1;
+    words[0] = unit.object as u32 + 1;
     words[1] = u32::from(tiled);
     words[2] = u32::from(analytic);
     words[3] = u32::from(several);
-    let direct = fold(n.direct, &n.input_min, &n.input_max, n.direct_scale);
-    let indirect = fold(n.indirect, &n.input_min, &n.input_max, n.indirect_scale);
+    words[4] = index as u32;
+    for (word, value) in words[5..11].iter_mut().zip(unit.min.iter().chain(&unit.max)) {
+        *word = value.to_bits();
+    }
+    let (direct, indirect) = (unit.direct.folded(), unit.indirect.folded());
     for (word, value) in words[FIRST_PARAMETER_ID..].iter_mut().zip(direct.iter().chain(&indirect)) {
         *word = value.to_bits();
     }
@@ -253,7 +304,8 @@ impl NetworkConstants {
 struct StoragePush {
     eye: [f32; 4],
     light_count: u32,
-    pad: [u32; 3],
+    objects: u32,
+    pad: [u32; 2],
 }
 
 #[repr(C)]
@@ -274,6 +326,7 @@ struct SpecializedPush {
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct ClassifyPush {
     objects: u32,
+    units: u32,
     tile_capacity: u32,
     exposure_scale: f32,
     shown: u32,
@@ -349,6 +402,10 @@ pub struct NetworkPass {
     lights: Buffer,
     /// The radiance images; `None` when the pass writes a display image instead.
     outputs: Option<NetworkOutputs>,
+    /// Object ids the G-buffer may hold.
+    objects: u32,
+    /// The unit table (`network_units.glsl`).
+    units: Buffer,
     kind: Kind,
 }
 
@@ -359,28 +416,23 @@ enum Kind {
 
 struct Specialized {
     classify: ComputePass,
-    /// Two pipelines per object with networks, in the order of `objects`: for frames of one
-    /// light, then of several.
+    /// Two pipelines per unit, in unit order: for frames of one light, then of several.
     networks: ComputePass,
-    /// Object id of each pipeline.
-    objects: Vec<usize>,
-    object_count: u32,
+    unit_count: u32,
     tiled: bool,
-    /// 1 per object with networks, 0 otherwise.
-    trained: Buffer,
-    /// A `VkDispatchIndirectCommand` per object id.
+    /// A `VkDispatchIndirectCommand` per unit.
     dispatch: Buffer,
     /// What `dispatch` is reset to before each frame: no tiles, y = z = 1.
     dispatch_reset: Vec<u32>,
-    /// Tile lists: `tile_capacity` entries per object id; sized with the image.
+    /// Tile lists: `tile_capacity` entries per unit; sized with the image.
     tiles: Buffer,
     tile_capacity: u32,
     direct: Direct,
 }
 
 impl NetworkPass {
-    /// The pass for `objects` (by object id; `None` for objects without networks), which
-    /// reads `gbuffer`. With `display` (an RGBA8 storage image of the G-buffer's size), the
+    /// The pass for the network `units` of a scene of `objects` object ids (objects without a
+    /// unit get no direct or indirect light), which reads `gbuffer`. With `display` (an RGBA8 storage image of the G-buffer's size), the
     /// pass writes only that: the component shown, tonemapped, as a window shows it; the
     /// storage variant cannot. `materials` holds each material's emitted radiance (rgb, before
     /// its emissive texture) and its `KHR_materials_specular` factor. `direct` says where
@@ -391,15 +443,15 @@ impl NetworkPass {
         variant: Variant,
         shaders: &NetworkShaders,
         gbuffer: &GBufferTargets,
-        objects: &[Option<ObjectNetworks>],
+        objects: usize,
+        units: &[NetworkUnit],
         materials: &[[f32; 4]],
         display: Option<&Image>,
         direct: DirectLight,
     ) -> Result<Self> {
-        if objects.len() > gbuffer::MAX_OBJECTS || materials.len() > gbuffer::MAX_MATERIALS {
+        if objects > gbuffer::MAX_OBJECTS || materials.len() > gbuffer::MAX_MATERIALS {
             return Err(Error::Invalid(format!(
-                "{} objects and {} materials; the G-buffer tells apart at most {} objects and {} materials",
-                objects.len(),
+                "{objects} objects and {} materials; the G-buffer tells apart at most {} objects and {} materials",
                 materials.len(),
                 gbuffer::MAX_OBJECTS,
                 gbuffer::MAX_MATERIALS
@@ -414,7 +466,13 @@ impl NetworkPass {
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?);
-        let shared = Shared { materials: &materials, lights: &lights };
+        let units = ordered(objects, units)?;
+        let table = ctx.guard(ctx.create_buffer_with_data(
+            "network units",
+            bytemuck::cast_slice(&unit_table(objects, &units)),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?);
+        let shared = Shared { materials: &materials, lights: &lights, units: &table };
         let outputs = match display {
             Some(_) => None,
             None => Some(NetworkOutputs::new(ctx, gbuffer.extent)?),
@@ -428,7 +486,7 @@ impl NetworkPass {
                 ))
             }
             Variant::Storage => match written {
-                Written::Radiance(o) => storage(ctx, shaders.storage, gbuffer, shared, o, objects)?,
+                Written::Radiance(o) => storage(ctx, shaders.storage, gbuffer, shared, o, &units)?,
                 Written::Display(_) => {
                     return Err(Error::Invalid("the storage network variant cannot write a display image".into()))
                 }
@@ -439,7 +497,7 @@ impl NetworkPass {
                 gbuffer,
                 shared,
                 written,
-                objects,
+                &units,
                 variant == Variant::Tiled,
                 direct,
             )?)),
@@ -450,6 +508,8 @@ impl NetworkPass {
             materials: materials.keep(),
             lights: lights.keep(),
             outputs: outputs.keep(),
+            objects: objects as u32,
+            units: table.keep(),
             kind,
         })
     }
@@ -489,25 +549,25 @@ impl NetworkPass {
         };
         let outputs = ctx.guard(outputs);
         let tiles = match &self.kind {
-            Kind::Specialized(s) => Some(tile_buffer(ctx, s.object_count as usize, extent)?),
+            Kind::Specialized(s) => Some(tile_buffer(ctx, s.unit_count as usize, extent)?),
             Kind::Storage { .. } => None,
         };
         std::mem::replace(&mut self.outputs, outputs.keep()).destroy(ctx);
         self.extent = extent;
         let written = Written::of(&self.outputs, display)?;
-        let shared = Shared { materials: &self.materials, lights: &self.lights };
+        let shared = Shared { materials: &self.materials, lights: &self.lights, units: &self.units };
         match &mut self.kind {
             Kind::Storage { pass, weights } => {
-                pass.rebind(ctx, &network_bindings(gbuffer, shared, weights, written, None))
+                pass.rebind(ctx, &network_bindings(gbuffer, shared, weights, written, Bind::StorageBuffer(&self.units)))
             }
             Kind::Specialized(s) => {
                 if let Some((tiles, capacity)) = tiles {
                     ctx.destroy_buffer(std::mem::replace(&mut s.tiles, tiles));
                     s.tile_capacity = capacity;
                 }
-                let bindings = classify_bindings(gbuffer, &self.materials, &s.trained, &s.dispatch, &s.tiles, written);
+                let bindings = classify_bindings(gbuffer, shared, &s.dispatch, &s.tiles, written);
                 s.classify.rebind(ctx, &bindings);
-                let shadow = Some(s.direct.shadow_maps());
+                let shadow = Bind::StorageImage(s.direct.shadow_maps());
                 s.networks.rebind(ctx, &network_bindings(gbuffer, shared, &s.tiles, written, shadow));
             }
         }
@@ -530,6 +590,7 @@ impl NetworkPass {
         let g = [&gbuffer.surface, &gbuffer.id, &gbuffer.shading];
         let materials = Use::buffer(&self.materials, Access::COMPUTE_READ);
         let lights = Use::buffer(&self.lights, Access::COMPUTE_READ);
+        let units = Use::buffer(&self.units, Access::COMPUTE_READ);
         let writes: Vec<Use> = Written::of(&self.outputs, display)?
             .images()
             .into_iter()
@@ -544,9 +605,9 @@ impl NetworkPass {
         match &self.kind {
             Kind::Storage { pass, weights } => {
                 let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
-                uses.extend([materials, lights, Use::buffer(weights, Access::COMPUTE_READ)]);
+                uses.extend([materials, lights, units, Use::buffer(weights, Access::COMPUTE_READ)]);
                 uses.extend(writes);
-                let push = StoragePush { eye: c.eye, light_count: c.light_count, pad: [0; 3] };
+                let push = StoragePush { eye: c.eye, light_count: c.light_count, objects: self.objects, pad: [0; 2] };
                 passes.push(Pass::new("network (storage buffer)", uses, move |cmd| {
                     // Pipeline 1 is for frames of several lights (SEVERAL_LIGHTS).
                     let pipeline = usize::from(c.light_count > 1);
@@ -559,7 +620,7 @@ impl NetworkPass {
                     "network dispatch reset",
                     vec![Use::buffer(&s.dispatch, Access::TRANSFER_WRITE)],
                     |cmd| {
-                        // SAFETY: recording outside a render pass; at most 12 KiB (MAX_OBJECTS),
+                        // SAFETY: recording outside a render pass; at most 12 KiB (MAX_UNITS),
                         // under vkCmdUpdateBuffer's 64 KiB.
                         unsafe {
                             ctx.device.cmd_update_buffer(
@@ -574,14 +635,16 @@ impl NetworkPass {
                 let mut uses = vec![
                     read(&gbuffer.id),
                     read(&gbuffer.shading),
+                    read(&gbuffer.surface),
                     materials,
-                    Use::buffer(&s.trained, Access::COMPUTE_READ),
+                    units,
                     Use::buffer(&s.dispatch, Access::COMPUTE_READ_WRITE),
                     Use::buffer(&s.tiles, Access::COMPUTE_WRITE),
                 ];
                 uses.extend(writes.iter().copied());
                 let push = ClassifyPush {
-                    objects: s.object_count,
+                    objects: self.objects,
+                    units: s.unit_count,
                     tile_capacity: s.tile_capacity,
                     exposure_scale: c.exposure_scale,
                     shown: c.shown,
@@ -620,6 +683,7 @@ impl NetworkPass {
             Kind::Specialized(s) => Destroy::destroy(*s, ctx),
         }
         ctx.destroy_buffer(self.materials);
+        ctx.destroy_buffer(self.units);
         ctx.destroy_buffer(self.lights);
         self.outputs.destroy(ctx);
     }
@@ -636,7 +700,7 @@ impl Destroy for Specialized {
         self.classify.destroy(ctx);
         self.networks.destroy(ctx);
         self.direct.destroy(ctx);
-        for buffer in [self.trained, self.dispatch, self.tiles] {
+        for buffer in [self.dispatch, self.tiles] {
             ctx.destroy_buffer(buffer);
         }
     }
@@ -647,17 +711,20 @@ impl Destroy for Specialized {
 struct Shared<'a> {
     materials: &'a Buffer,
     lights: &'a Buffer,
+    /// The unit table (`network_units.glsl`).
+    units: &'a Buffer,
 }
 
 /// The bindings `network_storage.comp` and `network_specialized_main.glsl` share: the
 /// G-buffer, the materials and the lights (`network_inputs.glsl`), the variant's buffer
-/// (weights or tile lists), then what the pass writes.
+/// (weights or tile lists), what the pass writes, then `last` (the storage variant's unit
+/// table, the specialized variants' shadow maps).
 fn network_bindings<'a>(
     gbuffer: &'a GBufferTargets,
     shared: Shared<'a>,
     buffer: &'a Buffer,
     written: Written<'a>,
-    shadow_maps: Option<&'a Image>,
+    last: Bind<'a>,
 ) -> Vec<Bind<'a>> {
     let mut binds = vec![
         Bind::StorageImage(&gbuffer.surface),
@@ -668,26 +735,26 @@ fn network_bindings<'a>(
         Bind::StorageBuffer(buffer),
     ];
     binds.extend(written.images().into_iter().map(Bind::StorageImage));
-    binds.extend(shadow_maps.map(Bind::StorageImage));
+    binds.push(last);
     binds
 }
 
 /// The bindings of `network_classify_main.glsl`.
 fn classify_bindings<'a>(
     gbuffer: &'a GBufferTargets,
-    materials: &'a Buffer,
-    trained: &'a Buffer,
+    shared: Shared<'a>,
     dispatch: &'a Buffer,
     tiles: &'a Buffer,
     written: Written<'a>,
 ) -> Vec<Bind<'a>> {
     let mut binds = vec![
         Bind::StorageImage(&gbuffer.id),
-        Bind::StorageBuffer(materials),
+        Bind::StorageBuffer(shared.materials),
         Bind::StorageImage(&gbuffer.shading),
-        Bind::StorageBuffer(trained),
+        Bind::StorageBuffer(shared.units),
         Bind::StorageBuffer(dispatch),
         Bind::StorageBuffer(tiles),
+        Bind::StorageImage(&gbuffer.surface),
     ];
     binds.extend(written.images().into_iter().map(Bind::StorageImage));
     binds
@@ -699,9 +766,9 @@ fn storage(
     gbuffer: &GBufferTargets,
     shared: Shared,
     outputs: &NetworkOutputs,
-    objects: &[Option<ObjectNetworks>],
+    units: &[NetworkUnit],
 ) -> Result<Kind> {
-    let weights = pack_weights(objects)?;
+    let weights = pack_weights(units);
     let max = u64::from(ctx.info.limits.max_storage_buffer_range);
     if (weights.len() * 4) as u64 > max {
         return Err(Error::Invalid(format!(
@@ -714,7 +781,8 @@ fn storage(
         bytemuck::cast_slice(&weights),
         vk::BufferUsageFlags::STORAGE_BUFFER,
     )?);
-    let bindings = network_bindings(gbuffer, shared, &weights, Written::Radiance(outputs), None);
+    let bindings =
+        network_bindings(gbuffer, shared, &weights, Written::Radiance(outputs), Bind::StorageBuffer(shared.units));
     let push = std::mem::size_of::<StoragePush>() as u32;
     // One pipeline for frames of one light, one for several (`SEVERAL_LIGHTS`).
     let lights = [vec![0], vec![1]];
@@ -723,14 +791,14 @@ fn storage(
     Ok(Kind::Storage { pass, weights: weights.keep() })
 }
 
-/// The tile lists of `objects` object ids at `extent`, and the tiles per object.
-fn tile_buffer(ctx: &Context, objects: usize, extent: vk::Extent2D) -> Result<(Buffer, u32)> {
+/// The tile lists of `units` network units at `extent`, and the tiles per unit.
+fn tile_buffer(ctx: &Context, units: usize, extent: vk::Extent2D) -> Result<(Buffer, u32)> {
     let tile_capacity = extent.width.div_ceil(TILE) * extent.height.div_ceil(TILE);
-    let tiles_bytes = objects.max(1) as u64 * u64::from(tile_capacity) * 4;
+    let tiles_bytes = units.max(1) as u64 * u64::from(tile_capacity) * 4;
     let max = u64::from(ctx.info.limits.max_storage_buffer_range);
     if tiles_bytes > max {
         return Err(Error::Invalid(format!(
-            "tile lists of {objects} objects at {}x{} need {tiles_bytes} bytes, over maxStorageBufferRange {max}; \
+            "tile lists of {units} network units at {}x{} need {tiles_bytes} bytes, over maxStorageBufferRange {max}; \
              render smaller or use --variant storage",
             extent.width, extent.height
         )));
@@ -747,7 +815,7 @@ fn specialized(
     gbuffer: &GBufferTargets,
     shared: Shared,
     written: Written,
-    objects: &[Option<ObjectNetworks>],
+    units: &[NetworkUnit],
     tiled: bool,
     direct: DirectLight,
 ) -> Result<Specialized> {
@@ -755,31 +823,23 @@ fn specialized(
         Written::Radiance(_) => (shaders.classify, shaders.specialized),
         Written::Display(_) => (shaders.classify_display, shaders.specialized_display),
     };
-    if objects.len() > MAX_OBJECTS {
+    if units.len() > MAX_UNITS {
         return Err(Error::Invalid(format!(
-            "{} objects; the specialized network variants handle at most {MAX_OBJECTS} (use --variant storage)",
-            objects.len()
+            "{} network units; the specialized network variants handle at most {MAX_UNITS} (use --variant storage)",
+            units.len()
         )));
     }
-    let mut specializations = Vec::new();
-    let mut trained_ids = Vec::new();
-    for (id, object) in objects.iter().enumerate() {
-        if let Some(n) = object {
-            n.check(id)?;
-            let analytic = matches!(direct, DirectLight::Analytic { .. });
-            for several in [false, true] {
-                specializations.push(specialization(id, n, tiled, analytic, several));
-            }
-            trained_ids.push(id);
-        }
-    }
-    let trained: Vec<u32> = objects.iter().map(|o| u32::from(o.is_some())).collect();
-    let dispatch_reset: Vec<u32> = objects.iter().flat_map(|_| [0, 1, 1]).collect();
+    let analytic = matches!(direct, DirectLight::Analytic { .. });
+    let specializations: Vec<Specialization> = units
+        .iter()
+        .enumerate()
+        .flat_map(|(index, unit)| [false, true].map(|several| specialization(index, unit, tiled, analytic, several)))
+        .collect();
+    let dispatch_reset: Vec<u32> = units.iter().flat_map(|_| [0, 1, 1]).collect();
 
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-    let (tiles, tile_capacity) = tile_buffer(ctx, objects.len(), gbuffer.extent)?;
+    let (tiles, tile_capacity) = tile_buffer(ctx, units.len(), gbuffer.extent)?;
     let tiles = ctx.guard(tiles);
-    let trained = ctx.guard(ctx.create_buffer_with_data("network trained objects", pad(&trained), storage)?);
     let dispatch = ctx.guard(ctx.create_buffer(
         "network dispatch",
         pad(&dispatch_reset).len() as u64,
@@ -790,7 +850,7 @@ fn specialized(
         ctx,
         "network tile classification",
         classify_spirv,
-        &classify_bindings(gbuffer, shared.materials, &trained, &dispatch, &tiles, written),
+        &classify_bindings(gbuffer, shared, &dispatch, &tiles, written),
         std::mem::size_of::<ClassifyPush>() as u32,
         (TILE, TILE),
     )?);
@@ -812,7 +872,7 @@ fn specialized(
         ctx,
         "network (specialization constants)",
         specialized_spirv,
-        &network_bindings(gbuffer, shared, &tiles, written, Some(direct.shadow_maps())),
+        &network_bindings(gbuffer, shared, &tiles, written, Bind::StorageImage(direct.shadow_maps())),
         std::mem::size_of::<SpecializedPush>() as u32,
         (TILE, TILE),
         &specializations,
@@ -820,10 +880,8 @@ fn specialized(
     Ok(Specialized {
         classify: classify.keep(),
         networks,
-        objects: trained_ids,
-        object_count: objects.len() as u32,
+        unit_count: units.len() as u32,
         tiled,
-        trained: trained.keep(),
         dispatch: dispatch.keep(),
         dispatch_reset,
         tiles: tiles.keep(),
@@ -839,7 +897,7 @@ fn pad(words: &[u32]) -> &[u8] {
 }
 
 impl Specialized {
-    /// The per-object dispatches. Each writes only its own object's pixels of the outputs.
+    /// The per-unit dispatches. Each writes only its own unit's pixels of the outputs.
     fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, c: &NetworkConstants) {
         let (intensity, spot) = match &self.direct {
             Direct::Analytic { light, .. } => (light.intensity, light.spot),
@@ -858,9 +916,9 @@ impl Specialized {
             pad: [0; 3],
         };
         let several = usize::from(c.light_count > 1);
-        for (index, &id) in self.objects.iter().enumerate() {
+        for index in 0..self.unit_count as usize {
             let dispatch = if self.tiled {
-                Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * id as u64 }
+                Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * index as u64 }
             } else {
                 Dispatch::Covering { width: extent.width, height: extent.height }
             };

@@ -1,5 +1,6 @@
 // Radiance regression function on the GPU: INPUTS → HIDDEN1 tanh → HIDDEN2 tanh → 3, reading
-// the parameters from `weights` at `base`. Follows baker/src/network.rs (`Network::evaluate`,
+// the parameters from `weights` at `base`, with the input normalisation and the output scale
+// folded in (network_pass.rs, `fold`), so that it takes raw inputs. Follows baker/src/network.rs (`Network::evaluate`,
 // `forward`), with the first layer split in two so that several lights share its per-pixel
 // part; the shape and parameter offsets come from
 // baker/src/network_layout.rs (through network_inputs.glsl).
@@ -7,12 +8,6 @@
 #define RRF_NETWORK_GLSL
 
 #include "network_inputs.glsl"
-
-// Maps x from [lo, hi] to [-1, 1]; a constant input maps to 0.
-float normalize_input(float x, float lo, float hi) {
-    float range = hi - lo;
-    return range > 1e-6 ? 2.0 * (x - lo) / range - 1.0 : 0.0;
-}
 
 // The network after its first layer's sums `s` (bias plus weighted inputs).
 vec3 forward_from_sums(uint base, float s[HIDDEN1]) {
@@ -39,7 +34,7 @@ vec3 forward_from_sums(uint base, float s[HIDDEN1]) {
     return y;
 }
 
-// The network on normalised inputs `x` (one light).
+// The network on raw inputs `x` (one light).
 vec3 forward(uint base, float x[INPUTS]) {
     float s[HIDDEN1];
     for (int j = 0; j < HIDDEN1; ++j) {
@@ -53,7 +48,7 @@ vec3 forward(uint base, float x[INPUTS]) {
 }
 
 // For several lights. First layer, part 1: the bias plus the weighted inputs other than the
-// light position (normalised `x`), once per pixel; `forward_lit` adds the light's share once
+// light position (raw `x`), once per pixel; `forward_lit` adds the light's share once
 // per light.
 void forward_surface(uint base, float x[INPUTS], out float s[HIDDEN1]) {
     for (int j = 0; j < HIDDEN1; ++j) {
@@ -67,7 +62,7 @@ void forward_surface(uint base, float x[INPUTS], out float s[HIDDEN1]) {
     }
 }
 
-// The network on first-layer sums `s` and the normalised light position `light`.
+// The network on first-layer sums `s` and the light position `light`.
 vec3 forward_lit(uint base, float s[HIDDEN1], vec3 light) {
     float lit[HIDDEN1];
     for (int j = 0; j < HIDDEN1; ++j) {

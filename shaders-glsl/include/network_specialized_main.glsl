@@ -1,9 +1,10 @@
-// Network pass, step 2 of the specialized variants: one pipeline per object, with that
-// object's direct and indirect weights as specialization constants (see build.rs), so the
-// driver compiles them into the code as immediates.
+// Network pass, step 2 of the specialized variants: one pipeline per network unit (an object,
+// or the part of one in a box: network_units.glsl), with the unit's direct and indirect
+// weights as specialization constants (see build.rs), so the driver compiles them into the
+// code as immediates.
 //
 // TILED: the dispatch is indirect, one workgroup per tile that network_classify.comp listed
-// for this object. Otherwise it covers the whole image and skips other objects' pixels.
+// for this unit. Otherwise it covers the whole image and skips other units' pixels.
 //
 // With DISPLAY defined (network_display.comp) the pass writes only what the window shows: the
 // chosen component, tonemapped, into one RGBA8 image. Otherwise it writes the direct, indirect
@@ -24,6 +25,14 @@ layout(constant_id = 2) const bool ANALYTIC = false;
 // the networks about 50% slower inside a loop, even one that runs once, and most frames have
 // one light (BENCHMARKS.md, "Several lights").
 layout(constant_id = 3) const bool SEVERAL_LIGHTS = false;
+// The unit's index (its tile list) and box, half-open, as in network_units.glsl.
+layout(constant_id = 4) const uint UNIT = 0u;
+layout(constant_id = 5) const float BOX_MIN_X = 0.0;
+layout(constant_id = 6) const float BOX_MIN_Y = 0.0;
+layout(constant_id = 7) const float BOX_MIN_Z = 0.0;
+layout(constant_id = 8) const float BOX_MAX_X = 0.0;
+layout(constant_id = 9) const float BOX_MAX_Y = 0.0;
+layout(constant_id = 10) const float BOX_MAX_Z = 0.0;
 
 // Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
 layout(binding = 5) readonly buffer Tiles { uint tiles[]; };
@@ -62,7 +71,7 @@ layout(push_constant) uniform Constants {
 void main() {
     uvec2 tile = gl_WorkGroupID.xy;
     if (TILED) {
-        uint packed = tiles[(OBJECT - 1u) * constants.tile_capacity + gl_WorkGroupID.x];
+        uint packed = tiles[UNIT * constants.tile_capacity + gl_WorkGroupID.x];
         tile = uvec2(packed & 0xffffu, packed >> 16);
     }
     ivec2 pixel = ivec2(tile * gl_WorkGroupSize.xy + gl_LocalInvocationID.xy);
@@ -75,6 +84,11 @@ void main() {
     }
     Shading shading = pixel_shading(pixel);
     float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
+    vec3 p = vec3(x[0], x[1], x[2]);
+    if (any(lessThan(p, vec3(BOX_MIN_X, BOX_MIN_Y, BOX_MIN_Z)))
+        || any(greaterThanEqual(p, vec3(BOX_MAX_X, BOX_MAX_Y, BOX_MAX_Z)))) {
+        return;
+    }
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
     if (!SEVERAL_LIGHTS) {
@@ -105,7 +119,6 @@ void main() {
     direct *= reflectance;
     indirect *= reflectance;
     if (ANALYTIC) {
-        vec3 p = vec3(x[0], x[1], x[2]);
         vec3 wo = vec3(x[3], x[4], x[5]);
         vec3 n = vec3(x[9], x[10], x[11]);
         direct = analytic_direct(p, n, wo, shading, materials[id_material(id)].w);

@@ -16,6 +16,7 @@ mod cache;
 pub mod lm;
 pub mod lock;
 pub mod samples;
+mod train;
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -26,12 +27,13 @@ use serde::Serialize;
 
 use crate::hash::Fnv64;
 use crate::model::{Metadata, Model, NetworkInfo, Untrained, FORMAT_VERSION, INPUT_NAMES};
-use crate::network::{normalize, Component, Network, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS};
+use crate::network::{Component, Network, HIDDEN1, HIDDEN2, OUTPUTS};
 use crate::scene::{BakeOverrides, Scene};
 use crate::trace::integrator::non_finite_dropped;
-use crate::trace::sampling::{mix64, Rng};
+use crate::trace::sampling::mix64;
 use crate::trace::{Geometry, TraceSettings};
-use lm::{initial_parameters, Dataset, LmSettings};
+pub use train::{network_data, NetworkData, Node};
+use train::train_tree;
 use samples::{latin_hypercube, sample_configuration, Aim, Sample, SurfacePoints, SAMPLE_BYTES};
 use serde::Deserialize;
 
@@ -86,6 +88,11 @@ pub struct BakeSettings {
     pub validation_fraction: f32,
     /// Configurations per shard file.
     pub shard_configurations: u32,
+    /// The deepest an object's kd-tree may grow (0: one network per object and component).
+    pub split_depth: u32,
+    /// A network whose validation error, relative to the mean square of its targets, is above
+    /// this is split in two (while the tree may grow and each half has `min_samples`).
+    pub split_above: f64,
     /// Which networks to train. Written to the model and the cache keys only when not both,
     /// so that bakes of both keep the bytes they had before this setting existed.
     #[serde(skip_serializing_if = "Trained::is_both")]
@@ -108,6 +115,8 @@ impl BakeSettings {
                 min_samples: 100,
                 validation_fraction: 0.2,
                 shard_configurations: 4,
+                split_depth: 1,
+                split_above: SPLIT_ABOVE,
                 trained: Trained::Both,
             },
             Quality::Preview => BakeSettings {
@@ -122,6 +131,8 @@ impl BakeSettings {
                 min_samples: 200,
                 validation_fraction: 0.15,
                 shard_configurations: 8,
+                split_depth: 1,
+                split_above: SPLIT_ABOVE,
                 trained: Trained::Both,
             },
             Quality::Final => BakeSettings {
@@ -136,6 +147,8 @@ impl BakeSettings {
                 min_samples: 400,
                 validation_fraction: 0.15,
                 shard_configurations: 8,
+                split_depth: 2,
+                split_above: SPLIT_ABOVE,
                 trained: Trained::Both,
             },
         };
@@ -248,11 +261,17 @@ impl BakeReport {
 }
 
 const SHARD_MAGIC: &[u8; 8] = b"RRFSHRD2";
-const NETWORK_MAGIC: &[u8; 8] = b"RRFNETW1";
+const NETWORK_MAGIC: &[u8; 8] = b"RRFNETW2";
 
-/// A trained network as its checkpoint file holds it (JSON: f32 and f64 round-trip exactly).
+/// The trained networks of one object's component (one per kd-tree leaf) as their checkpoint
+/// file holds them (JSON: f32 and f64 round-trip exactly).
 #[derive(Serialize, Deserialize)]
 struct Checkpoint {
+    leaves: Vec<Leaf>,
+}
+
+#[derive(Serialize, Deserialize)]
+struct Leaf {
     info: NetworkInfo,
     params: Vec<f32>,
 }
@@ -481,7 +500,7 @@ pub fn bake_part(
     let settings_key = serde_json::to_string(settings).expect("settings serialise");
     let mine: Vec<(u32, Component)> =
         jobs.iter().enumerate().filter(|(i, _)| train_work.mine(*i)).map(|(_, &job)| job).collect();
-    let networks: Vec<(Network, NetworkInfo)> = mine
+    let networks: Vec<Vec<(Network, NetworkInfo)>> = mine
         .par_iter()
         .map(|&(object, component)| {
             let mut key = cache_key(scene, &settings_key);
@@ -489,10 +508,10 @@ pub fn bake_part(
             key.write(&object.to_le_bytes());
             let path = cache.join(format!("network-{object:05}-{}.bin", component.name()));
             let checkpoint = cache::read(&path, NETWORK_MAGIC, key.0, &corrupt, |bytes| {
-                let Checkpoint { info, params } = serde_json::from_slice(bytes).ok()?;
-                Some((info.network(params)?, info))
+                let Checkpoint { leaves } = serde_json::from_slice(bytes).ok()?;
+                leaves.into_iter().map(|Leaf { info, params }| Some((info.network(params)?, info))).collect()
             });
-            let (network, info) = match checkpoint {
+            let leaves = match checkpoint {
                 Some(resumed) => {
                     resumed_networks.fetch_add(1, Ordering::SeqCst);
                     resumed
@@ -501,21 +520,23 @@ pub fn bake_part(
                     return Err(BakeError::MissingStage { path, stage: Stage::Train.name() })
                 }
                 None => {
-                    let (network, info) =
-                        train_network(scene, settings, object, component, &by_object[object as usize]);
-                    let checkpoint = Checkpoint { info, params: network.params };
+                    let leaves = train_tree(scene, settings, object, component, &by_object[object as usize]);
+                    let checkpoint = Checkpoint {
+                        leaves: leaves.iter().map(|(n, info)| Leaf { info: info.clone(), params: n.params.clone() }).collect(),
+                    };
                     let json = serde_json::to_vec(&checkpoint).expect("checkpoint serialises");
                     cache::write(&path, NETWORK_MAGIC, key.0, &json)?;
-                    (Network { params: checkpoint.params, ..network }, checkpoint.info)
+                    leaves
                 }
             };
             let d = trained.fetch_add(1, Ordering::SeqCst) + 1;
             progress.trained(d, mine.len() as u64);
-            Ok((network, info))
+            Ok(leaves)
         })
         .collect::<Vec<_>>()
         .into_iter()
         .collect::<Result<_, BakeError>>()?; // the first error in job order, the same on every run
+    let networks: Vec<(Network, NetworkInfo)> = networks.into_iter().flatten().collect();
     report.train_seconds = start.elapsed().as_secs_f64();
     report.resumed_networks = resumed_networks.into_inner();
     report.networks = networks.len();
@@ -550,6 +571,10 @@ fn cache_key(scene: &Scene, settings: &str) -> Fnv64 {
     key.write(settings.as_bytes());
     key
 }
+
+/// The presets' [`BakeSettings::split_above`]: a network whose validation error is over 5% of
+/// its targets' mean square is split.
+const SPLIT_ABOVE: f64 = 0.05;
 
 /// Objects that got fewer samples than this many times `min_samples` from rays over the sphere
 /// get rays aimed at them.
@@ -659,101 +684,4 @@ impl From<&BakeSettings> for SamplingKey {
             format: 1,
         }
     }
-}
-
-/// Input ranges for an object's networks: its bounding box for positions, the light's box for
-/// the light, [-1, 1] for directions, [0, 1] for roughness.
-fn input_ranges(scene: &Scene, object: u32) -> ([f32; INPUTS], [f32; INPUTS]) {
-    let o = &scene.objects[object as usize];
-    let (mut lo, mut hi) = ([-1.0f32; INPUTS], [1.0f32; INPUTS]);
-    let min = o.positions.iter().copied().fold(glam::Vec3::splat(f32::INFINITY), glam::Vec3::min);
-    let max = o.positions.iter().copied().fold(glam::Vec3::splat(f32::NEG_INFINITY), glam::Vec3::max);
-    let light = scene.moving_light.as_ref().map(|l| l.bounds);
-    for a in 0..3 {
-        lo[a] = min[a];
-        hi[a] = max[a];
-        if let Some(b) = light {
-            lo[6 + a] = b.min[a];
-            hi[6 + a] = b.max[a];
-        }
-    }
-    lo[12] = 0.0;
-    hi[12] = 1.0;
-    (lo, hi)
-}
-
-/// The training and validation sets of one network, normalised as the model records it.
-pub struct NetworkData {
-    pub train: Dataset,
-    pub validation: Dataset,
-    pub input_min: [f32; INPUTS],
-    pub input_max: [f32; INPUTS],
-    /// Targets are divided by this (their RMS).
-    pub output_scale: f32,
-}
-
-/// A deterministic random subset of `samples`, split into training and validation sets.
-pub fn network_data(
-    scene: &Scene,
-    settings: &BakeSettings,
-    object: u32,
-    component: Component,
-    samples: &[&Sample],
-) -> NetworkData {
-    let mut order: Vec<usize> = (0..samples.len()).collect();
-    Rng::new(settings.seed, 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
-    order.truncate(settings.max_samples_per_network);
-    let (input_min, input_max) = input_ranges(scene, object);
-    let target = |s: &Sample| s.target(component);
-    let rms = {
-        let sum: f64 = order.iter().flat_map(|&i| target(samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
-        ((sum / (order.len() * OUTPUTS) as f64).sqrt() as f32).max(1e-6)
-    };
-    let validation_count = ((order.len() as f32 * settings.validation_fraction) as usize).max(1);
-    let (mut train, mut validation) = (Dataset::default(), Dataset::default());
-    for (n, &i) in order.iter().enumerate() {
-        let s = samples[i];
-        let set = if n < validation_count { &mut validation } else { &mut train };
-        set.inputs.push(std::array::from_fn(|k| normalize(s.inputs[k], input_min[k], input_max[k])));
-        set.targets.push(target(s).map(|v| v / rms));
-    }
-    NetworkData { train, validation, input_min, input_max, output_scale: rms }
-}
-
-fn train_network(
-    scene: &Scene,
-    settings: &BakeSettings,
-    object: u32,
-    component: Component,
-    samples: &[&Sample],
-) -> (Network, NetworkInfo) {
-    let NetworkData { train, validation, input_min, input_max, output_scale: rms } =
-        network_data(scene, settings, object, component, samples);
-    let mut mean = [0.0f32; OUTPUTS];
-    for t in &train.targets {
-        (0..OUTPUTS).for_each(|c| mean[c] += t[c] / train.len() as f32);
-    }
-    let seed = mix64(settings.seed ^ (u64::from(object) << 8) ^ component as u64);
-    let result = lm::train(
-        &train,
-        &validation,
-        initial_parameters(seed, mean),
-        &LmSettings { max_iterations: settings.max_iterations, patience: 10 },
-    );
-    let name = scene.objects[object as usize].name.clone();
-    // Errors in radiance units.
-    let scale2 = f64::from(rms) * f64::from(rms);
-    let info = NetworkInfo {
-        object: name.clone(),
-        component,
-        input_min: input_min.to_vec(),
-        input_max: input_max.to_vec(),
-        target_transform: "scale".into(),
-        output_scale: rms,
-        samples: train.len() + validation.len(),
-        train_mse: result.train_mse * scale2,
-        val_mse: result.val_mse * scale2,
-        iterations: result.iterations,
-    };
-    (Network { object: name, component, input_min, input_max, output_scale: rms, params: result.params }, info)
 }

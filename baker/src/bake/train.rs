@@ -1,0 +1,230 @@
+//! Training one object's networks of one component: a network over the whole object, and
+//! where its validation error stays above the bake's threshold, the paper's kd-tree split
+//! ([`crate::partition`]): a network per half, recursively, up to the bake's depth.
+
+use glam::Vec3;
+
+use super::lm::{self, initial_parameters, Dataset, LmSettings};
+use super::samples::Sample;
+use super::BakeSettings;
+use crate::hash::Fnv64;
+use crate::model::NetworkInfo;
+use crate::network::{normalize, Component, Network, INPUTS, OUTPUTS};
+use crate::partition::Region;
+use crate::scene::{Aabb, Scene};
+use crate::trace::sampling::{mix64, Rng};
+
+/// Each half of a split learns from the samples in its box grown by this share of the box's
+/// size on every side, so that both networks that meet at a split plane learned the light
+/// there and the seam between them stays faint.
+const OVERLAP: f32 = 0.1;
+
+/// A node of an object's kd-tree: its region and its part of the object's bounding box.
+pub struct Node {
+    pub region: Region,
+    pub bounds: Aabb,
+}
+
+impl Node {
+    /// The whole of `object`.
+    pub fn root(scene: &Scene, object: u32) -> Node {
+        let positions = &scene.objects[object as usize].positions;
+        let min = positions.iter().copied().fold(Vec3::splat(f32::INFINITY), Vec3::min);
+        let max = positions.iter().copied().fold(Vec3::splat(f32::NEG_INFINITY), Vec3::max);
+        Node { region: Region::default(), bounds: Aabb { min, max } }
+    }
+
+    /// The two halves, split at the midpoint of the longest side (the paper's rule).
+    fn children(&self) -> [Node; 2] {
+        let size = self.bounds.max - self.bounds.min;
+        let axis = if size.x >= size.y && size.x >= size.z { 0 } else if size.y >= size.z { 1 } else { 2 };
+        let at = 0.5 * (self.bounds.min[axis] + self.bounds.max[axis]);
+        let (mut low, mut high) = (self.bounds, self.bounds);
+        low.max[axis] = at;
+        high.min[axis] = at;
+        [
+            Node { region: self.region.child(axis as u8, at, true), bounds: low },
+            Node { region: self.region.child(axis as u8, at, false), bounds: high },
+        ]
+    }
+
+    /// Where the node's samples come from: its box grown by [`OVERLAP`] towards the split
+    /// planes that bound it, and without bound where no plane does.
+    fn sample_box(&self) -> Aabb {
+        let grow = (self.bounds.max - self.bounds.min) * OVERLAP;
+        let (min, max) = self.region.bounds();
+        let open = |bound: f32, grown: f32, infinity: f32| if bound.abs() == f32::MAX { infinity } else { grown };
+        Aabb {
+            min: Vec3::from_array(std::array::from_fn(|a| open(min[a], self.bounds.min[a] - grow[a], f32::NEG_INFINITY))),
+            max: Vec3::from_array(std::array::from_fn(|a| open(max[a], self.bounds.max[a] + grow[a], f32::INFINITY))),
+        }
+    }
+
+    /// Separates the random streams of nodes; 0 for the root, so that an object that is not
+    /// split trains as it did before trees existed.
+    fn stream(&self) -> u64 {
+        if self.region.is_whole() {
+            0
+        } else {
+            Fnv64::of(self.region.path().as_bytes())
+        }
+    }
+
+    /// Input ranges for the node's network: its sample box for positions (the object's bounding
+    /// box for the root),
+    /// the light's box for the light, [-1, 1] for directions, [0, 1] for roughness.
+    fn input_ranges(&self, scene: &Scene) -> ([f32; INPUTS], [f32; INPUTS]) {
+        let (mut lo, mut hi) = ([-1.0f32; INPUTS], [1.0f32; INPUTS]);
+        let samples = self.sample_box();
+        let light = scene.moving_light.as_ref().map(|l| l.bounds);
+        for a in 0..3 {
+            // The sample box within the object: unbounded sides are the object's own.
+            lo[a] = if samples.min[a].is_finite() { samples.min[a] } else { self.bounds.min[a] };
+            hi[a] = if samples.max[a].is_finite() { samples.max[a] } else { self.bounds.max[a] };
+            if let Some(b) = light {
+                lo[6 + a] = b.min[a];
+                hi[6 + a] = b.max[a];
+            }
+        }
+        lo[12] = 0.0;
+        hi[12] = 1.0;
+        (lo, hi)
+    }
+}
+
+/// The training and validation sets of one network, normalised as the model records it.
+pub struct NetworkData {
+    pub train: Dataset,
+    pub validation: Dataset,
+    pub input_min: [f32; INPUTS],
+    pub input_max: [f32; INPUTS],
+    /// Targets are divided by this (their RMS).
+    pub output_scale: f32,
+}
+
+/// A deterministic random subset of `samples` (those of `node`), split into training and
+/// validation sets.
+pub fn network_data(
+    scene: &Scene,
+    settings: &BakeSettings,
+    object: u32,
+    component: Component,
+    node: &Node,
+    samples: &[&Sample],
+) -> NetworkData {
+    let mut order: Vec<usize> = (0..samples.len()).collect();
+    Rng::new(settings.seed ^ node.stream(), 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
+    order.truncate(settings.max_samples_per_network);
+    let (input_min, input_max) = node.input_ranges(scene);
+    let target = |s: &Sample| s.target(component);
+    let rms = {
+        let sum: f64 = order.iter().flat_map(|&i| target(samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
+        ((sum / (order.len() * OUTPUTS) as f64).sqrt() as f32).max(1e-6)
+    };
+    let validation_count = ((order.len() as f32 * settings.validation_fraction) as usize).max(1);
+    let (mut train, mut validation) = (Dataset::default(), Dataset::default());
+    for (n, &i) in order.iter().enumerate() {
+        let s = samples[i];
+        let set = if n < validation_count { &mut validation } else { &mut train };
+        set.inputs.push(std::array::from_fn(|k| normalize(s.inputs[k], input_min[k], input_max[k])));
+        set.targets.push(target(s).map(|v| v / rms));
+    }
+    NetworkData { train, validation, input_min, input_max, output_scale: rms }
+}
+
+/// `object`'s networks of `component` from its `samples`: one, or one per leaf of its kd-tree,
+/// leaves in tree order (the low half first).
+pub fn train_tree(
+    scene: &Scene,
+    settings: &BakeSettings,
+    object: u32,
+    component: Component,
+    samples: &[&Sample],
+) -> Vec<(Network, NetworkInfo)> {
+    grow(scene, settings, object, component, Node::root(scene, object), samples, 0)
+}
+
+fn grow(
+    scene: &Scene,
+    settings: &BakeSettings,
+    object: u32,
+    component: Component,
+    node: Node,
+    samples: &[&Sample],
+    depth: u32,
+) -> Vec<(Network, NetworkInfo)> {
+    let (network, info, error) = train_network(scene, settings, object, component, &node, samples);
+    if depth >= settings.split_depth || error <= settings.split_above {
+        return vec![(network, info)];
+    }
+    let halves = node.children().map(|child| {
+        let b = child.sample_box();
+        let inside: Vec<&Sample> = samples.iter().copied().filter(|s| b.contains(position(s))).collect();
+        (child, inside)
+    });
+    if halves.iter().any(|(_, inside)| inside.len() < settings.min_samples) {
+        return vec![(network, info)];
+    }
+    let [(low, low_samples), (high, high_samples)] = halves;
+    let (mut leaves, high) = rayon::join(
+        || grow(scene, settings, object, component, low, &low_samples, depth + 1),
+        || grow(scene, settings, object, component, high, &high_samples, depth + 1),
+    );
+    leaves.extend(high);
+    leaves
+}
+
+fn position(s: &Sample) -> Vec3 {
+    Vec3::new(s.inputs[0], s.inputs[1], s.inputs[2])
+}
+
+/// One network on `node`'s samples, its record, and its validation error relative to the
+/// mean square of its targets (what decides a split).
+fn train_network(
+    scene: &Scene,
+    settings: &BakeSettings,
+    object: u32,
+    component: Component,
+    node: &Node,
+    samples: &[&Sample],
+) -> (Network, NetworkInfo, f64) {
+    let NetworkData { train, validation, input_min, input_max, output_scale: rms } =
+        network_data(scene, settings, object, component, node, samples);
+    let mut mean = [0.0f32; OUTPUTS];
+    for t in &train.targets {
+        (0..OUTPUTS).for_each(|c| mean[c] += t[c] / train.len() as f32);
+    }
+    let seed = mix64(settings.seed ^ (u64::from(object) << 8) ^ component as u64 ^ node.stream());
+    let result = lm::train(
+        &train,
+        &validation,
+        initial_parameters(seed, mean),
+        &LmSettings { max_iterations: settings.max_iterations, patience: 10 },
+    );
+    let name = scene.objects[object as usize].name.clone();
+    // Errors in radiance units.
+    let scale2 = f64::from(rms) * f64::from(rms);
+    let info = NetworkInfo {
+        object: name.clone(),
+        component,
+        region: node.region.clone(),
+        input_min: input_min.to_vec(),
+        input_max: input_max.to_vec(),
+        target_transform: "scale".into(),
+        output_scale: rms,
+        samples: train.len() + validation.len(),
+        train_mse: result.train_mse * scale2,
+        val_mse: result.val_mse * scale2,
+        iterations: result.iterations,
+    };
+    let network = Network {
+        object: name,
+        component,
+        region: node.region.clone(),
+        input_min,
+        input_max,
+        output_scale: rms,
+        params: result.params,
+    };
+    (network, info, result.val_mse)
+}
