@@ -90,6 +90,9 @@ pub struct NetworkInfo {
     pub samples: usize,
     pub train_mse: f64,
     pub val_mse: f64,
+    /// The validation targets' own noise (mean estimated variance): the `val_mse` of a
+    /// perfect fit.
+    pub val_noise: f64,
     pub iterations: u32,
 }
 

@@ -1,6 +1,7 @@
 //! Baking: resumption gives the same model, the model file round-trips, and every kind of bad
 //! model file is refused with a clear error.
 
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use rrf_baker::bake::{bake, BakeProgress, BakeSettings, Quality};
@@ -72,14 +73,27 @@ fn interrupted_bake_resumes_to_the_same_model() {
     assert!(repaired.to_bytes().unwrap() == full.to_bytes().unwrap());
 
     // Killed during training: the networks already trained are kept, the rest trained again.
-    let networks = cache_files(&full_cache, "network-");
-    assert_eq!(networks.len(), full.networks.len(), "one checkpoint per trained network");
+    let checkpoints = cache_files(&full_cache, "network-");
+    let jobs: HashSet<_> = full.networks.iter().map(|n| (n.object.clone(), n.component)).collect();
+    assert_eq!(checkpoints.len(), jobs.len(), "one checkpoint per object and component");
+    assert!(full.networks.len() > jobs.len(), "the test bake splits some object with its kd-tree");
     let training_cache = scratch("training");
-    for file in sample_files(&full_cache).iter().chain(&networks[..networks.len() / 2]) {
+    let kept = &checkpoints[..checkpoints.len() / 2];
+    for file in sample_files(&full_cache).iter().chain(kept) {
         std::fs::copy(file, training_cache.join(file.file_name().unwrap())).unwrap();
     }
+    // network-OBJECT-COMPONENT.bin holds every leaf of that object's component.
+    let leaves_kept: usize = kept
+        .iter()
+        .map(|file| {
+            let name = file.file_stem().unwrap().to_str().unwrap();
+            let (id, component) = name["network-".len()..].split_once('-').unwrap();
+            let object = &scene.objects[id.parse::<usize>().unwrap()].name;
+            full.networks.iter().filter(|n| &n.object == object && n.component.name() == component).count()
+        })
+        .sum();
     let (resumed, report) = test_bake(&scene, &training_cache);
-    assert_eq!((report.resumed_shards, report.resumed_networks), (report.shards, networks.len() / 2));
+    assert_eq!((report.resumed_shards, report.resumed_networks), (report.shards, leaves_kept));
     assert!(resumed.to_bytes().unwrap() == full.to_bytes().unwrap());
     assert_eq!(report.non_finite_dropped, 0, "no shard was traced again");
     let (_, report) = test_bake(&scene, &scratch("fresh"));
@@ -180,6 +194,13 @@ fn model_with_non_finite_values_under_a_valid_checksum_is_refused() {
     let message = Model::from_bytes(&nan_weight.to_bytes().unwrap()).unwrap_err();
     assert!(message.contains("parameter 7 is not finite"), "{message}");
 
+    let mut gap = model.clone();
+    let leaf = gap.networks.iter().position(|n| !n.region.is_whole()).expect("the test bake splits an object");
+    gap.networks.remove(leaf);
+    gap.metadata.networks.remove(leaf);
+    let message = Model::from_bytes(&gap.to_bytes().unwrap()).unwrap_err();
+    assert!(message.contains("not the leaves of one kd-tree"), "{message}");
+
     let mut inverted_range = model.clone();
     inverted_range.metadata.networks[0].input_min[3] = 2.0;
     let message = Model::from_bytes(&inverted_range.to_bytes().unwrap()).unwrap_err();
@@ -269,4 +290,24 @@ fn aimed_rays_sample_only_their_object_where_it_is_seen() {
         samples,
         sample_configuration(&scene, &geometry, &config, Aim::At(&target), 400, 2, &TraceSettings::default(), 3)
     );
+}
+
+/// With the kd-tree's depth at 0 the bake is the paper's plain form: one network per object
+/// and component, over the whole object; with depth 1 some objects split, in two leaves each.
+#[test]
+fn split_depth_bounds_the_kd_tree() {
+    let scene = scene("cornell-box");
+    let dir = scratch("split-depth");
+    let mut settings = BakeSettings::new(Quality::Test, 1, &scene);
+    for depth in [0, 1] {
+        settings.split_depth = depth;
+        let (model, _) = bake(&scene, &settings, &dir, &Quiet).unwrap();
+        let jobs: HashSet<_> = model.networks.iter().map(|n| (n.object.clone(), n.component)).collect();
+        for (object, component) in &jobs {
+            let leaves = model.networks(object, *component);
+            assert!(leaves.len() <= 1 << depth, "{object} {component:?}: {} leaves at depth {depth}", leaves.len());
+            assert!(leaves.iter().all(|n| n.region.0.len() == leaves.len().ilog2() as usize));
+        }
+        assert_eq!(model.networks.len() > jobs.len(), depth > 0, "depth {depth}");
+    }
 }

@@ -90,8 +90,9 @@ pub struct BakeSettings {
     pub shard_configurations: u32,
     /// The deepest an object's kd-tree may grow (0: one network per object and component).
     pub split_depth: u32,
-    /// A network whose validation error, relative to the mean square of its targets, is above
-    /// this is split in two (while the tree may grow and each half has `min_samples`).
+    /// A network whose validation error exceeds its targets' noise by more than this share of
+    /// their mean square is split in two (while the tree may grow and each half has
+    /// `min_samples`): the error that a better fit could remove, not the noise it cannot.
     pub split_above: f64,
     /// Which networks to train. Written to the model and the cache keys only when not both,
     /// so that bakes of both keep the bytes they had before this setting existed.
@@ -260,7 +261,7 @@ impl BakeReport {
     }
 }
 
-const SHARD_MAGIC: &[u8; 8] = b"RRFSHRD2";
+const SHARD_MAGIC: &[u8; 8] = b"RRFSHRD3";
 const NETWORK_MAGIC: &[u8; 8] = b"RRFNETW2";
 
 /// The trained networks of one object's component (one per kd-tree leaf) as their checkpoint
@@ -507,13 +508,13 @@ pub fn bake_part(
             key.write(&[component as u8]);
             key.write(&object.to_le_bytes());
             let path = cache.join(format!("network-{object:05}-{}.bin", component.name()));
-            let checkpoint = cache::read(&path, NETWORK_MAGIC, key.0, &corrupt, |bytes| {
+            let checkpoint: Option<Vec<(Network, NetworkInfo)>> = cache::read(&path, NETWORK_MAGIC, key.0, &corrupt, |bytes| {
                 let Checkpoint { leaves } = serde_json::from_slice(bytes).ok()?;
                 leaves.into_iter().map(|Leaf { info, params }| Some((info.network(params)?, info))).collect()
             });
             let leaves = match checkpoint {
                 Some(resumed) => {
-                    resumed_networks.fetch_add(1, Ordering::SeqCst);
+                    resumed_networks.fetch_add(resumed.len(), Ordering::SeqCst);
                     resumed
                 }
                 None if matches!(train_work, Work::Read) => {
@@ -574,7 +575,7 @@ fn cache_key(scene: &Scene, settings: &str) -> Fnv64 {
 
 /// The presets' [`BakeSettings::split_above`]: a network whose validation error is over 5% of
 /// its targets' mean square is split.
-const SPLIT_ABOVE: f64 = 0.05;
+const SPLIT_ABOVE: f64 = 0.0;
 
 /// Objects that got fewer samples than this many times `min_samples` from rays over the sphere
 /// get rays aimed at them.
@@ -681,7 +682,7 @@ impl From<&BakeSettings> for SamplingKey {
             paths_per_sample: s.paths_per_sample,
             max_depth: s.max_depth,
             shard_configurations: s.shard_configurations,
-            format: 1,
+            format: 2,
         }
     }
 }

@@ -23,6 +23,10 @@ pub struct Sample {
     pub inputs: [f32; INPUTS],
     pub direct: [f32; 3],
     pub indirect: [f32; 3],
+    /// The variance of each target's path average (direct, indirect; mean over the channels),
+    /// estimated from the spread of its paths: the part of a network's squared error on this
+    /// sample that no network can remove.
+    pub noise: [f32; 2],
 }
 
 impl Sample {
@@ -32,6 +36,11 @@ impl Sample {
             Component::Direct => self.direct,
             Component::Indirect => self.indirect,
         }
+    }
+
+    /// The estimated variance of [`Sample::target`] (see `noise`).
+    pub fn noise(&self, component: Component) -> f32 {
+        self.noise[component as usize]
     }
 }
 
@@ -157,35 +166,46 @@ fn sample_along(
         return None;
     }
     let mut sum = Radiance::default();
+    let mut squares = [Vec3::ZERO; 2];
     for path in 0..paths {
         let mut path_rng = Rng::new(seed ^ mix64(u64::from(ray) + 1), u64::from(path));
-        sum += radiance_leaving(world, &si, -dir, trace, &mut path_rng);
+        let l = radiance_leaving(world, &si, -dir, trace, &mut path_rng);
+        squares[0] += l.direct * l.direct;
+        squares[1] += l.indirect * l.indirect;
+        sum += l;
     }
-    let mean = sum.scaled(1.0 / paths.max(1) as f32);
+    let n = paths.max(1) as f32;
+    let mean = sum.scaled(1.0 / n);
     // The networks learn radiance over the surface's reflectance (`network::reflectance`).
     let r = reflectance(si.bsdf.base_color, si.bsdf.metallic, si.bsdf.specular);
+    // The variance of the mean of n paths: the paths' sample variance over n.
+    let noise = |squares: Vec3, mean: Vec3| {
+        let variance = (squares / n - mean * mean).max(Vec3::ZERO) * (n / (n - 1.0).max(1.0));
+        (variance / (n * r * r)).element_sum() / 3.0
+    };
     Some(Sample {
         object: si.object,
         inputs: raw_inputs(si.position, -dir, config.light, si.shading_normal, si.roughness),
         direct: (mean.direct / r).to_array(),
         indirect: (mean.indirect / r).to_array(),
+        noise: [noise(squares[0], mean.direct), noise(squares[1], mean.indirect)],
     })
 }
 
 /// Flat little-endian encoding of samples for shard files: per sample the object id (u32),
-/// then 13 inputs, 3 direct and 3 indirect (f32).
+/// then 13 inputs, 3 direct, 3 indirect and 2 noise values (f32).
 pub fn encode(samples: &[Sample]) -> Vec<u8> {
-    let mut out = Vec::with_capacity(samples.len() * 80);
+    let mut out = Vec::with_capacity(samples.len() * SAMPLE_BYTES);
     for s in samples {
         out.extend(s.object.to_le_bytes());
-        for v in s.inputs.iter().chain(&s.direct).chain(&s.indirect) {
+        for v in s.inputs.iter().chain(&s.direct).chain(&s.indirect).chain(&s.noise) {
             out.extend(v.to_le_bytes());
         }
     }
     out
 }
 
-pub const SAMPLE_BYTES: usize = 4 * (1 + INPUTS + 6);
+pub const SAMPLE_BYTES: usize = 4 * (1 + INPUTS + 8);
 
 /// Inverse of [`encode`]; `None` if the length is not a whole number of samples or a sample
 /// names an object past `objects`.
@@ -204,6 +224,7 @@ pub fn decode(bytes: &[u8], objects: usize) -> Option<Vec<Sample>> {
                     inputs: std::array::from_fn(|i| f(1 + i)),
                     direct: std::array::from_fn(|i| f(1 + INPUTS + i)),
                     indirect: std::array::from_fn(|i| f(4 + INPUTS + i)),
+                    noise: std::array::from_fn(|i| f(7 + INPUTS + i)),
                 }
             })
             .collect::<Vec<_>>(),

@@ -9,7 +9,7 @@ use super::samples::Sample;
 use super::BakeSettings;
 use crate::hash::Fnv64;
 use crate::model::NetworkInfo;
-use crate::network::{normalize, Component, Network, INPUTS, OUTPUTS};
+use crate::network::{normalize, Component, Network, INPUTS, OUTPUTS, W3};
 use crate::partition::Region;
 use crate::scene::{Aabb, Scene};
 use crate::trace::sampling::{mix64, Rng};
@@ -69,27 +69,28 @@ impl Node {
             Fnv64::of(self.region.path().as_bytes())
         }
     }
+}
 
-    /// Input ranges for the node's network: its sample box for positions (the object's bounding
-    /// box for the root),
-    /// the light's box for the light, [-1, 1] for directions, [0, 1] for roughness.
-    fn input_ranges(&self, scene: &Scene) -> ([f32; INPUTS], [f32; INPUTS]) {
-        let (mut lo, mut hi) = ([-1.0f32; INPUTS], [1.0f32; INPUTS]);
-        let samples = self.sample_box();
-        let light = scene.moving_light.as_ref().map(|l| l.bounds);
-        for a in 0..3 {
-            // The sample box within the object: unbounded sides are the object's own.
-            lo[a] = if samples.min[a].is_finite() { samples.min[a] } else { self.bounds.min[a] };
-            hi[a] = if samples.max[a].is_finite() { samples.max[a] } else { self.bounds.max[a] };
-            if let Some(b) = light {
-                lo[6 + a] = b.min[a];
-                hi[6 + a] = b.max[a];
-            }
+/// Input ranges for `object`'s networks, every leaf's the same: its bounding box for positions,
+/// the light's box for the light, [-1, 1] for directions, [0, 1] for roughness. Shared by the
+/// leaves so that a half starts from its parent's network as it is.
+fn input_ranges(scene: &Scene, object: u32) -> ([f32; INPUTS], [f32; INPUTS]) {
+    let o = &scene.objects[object as usize];
+    let (mut lo, mut hi) = ([-1.0f32; INPUTS], [1.0f32; INPUTS]);
+    let min = o.positions.iter().copied().fold(Vec3::splat(f32::INFINITY), Vec3::min);
+    let max = o.positions.iter().copied().fold(Vec3::splat(f32::NEG_INFINITY), Vec3::max);
+    let light = scene.moving_light.as_ref().map(|l| l.bounds);
+    for a in 0..3 {
+        lo[a] = min[a];
+        hi[a] = max[a];
+        if let Some(b) = light {
+            lo[6 + a] = b.min[a];
+            hi[6 + a] = b.max[a];
         }
-        lo[12] = 0.0;
-        hi[12] = 1.0;
-        (lo, hi)
     }
+    lo[12] = 0.0;
+    hi[12] = 1.0;
+    (lo, hi)
 }
 
 /// The training and validation sets of one network, normalised as the model records it.
@@ -100,6 +101,9 @@ pub struct NetworkData {
     pub input_max: [f32; INPUTS],
     /// Targets are divided by this (their RMS).
     pub output_scale: f32,
+    /// The mean of the validation targets' noise (their estimated variance, [`Sample::noise`]),
+    /// in the units of the scaled targets: the validation MSE a perfect fit would have.
+    pub validation_noise: f64,
 }
 
 /// A deterministic random subset of `samples` (those of `node`), split into training and
@@ -115,7 +119,7 @@ pub fn network_data(
     let mut order: Vec<usize> = (0..samples.len()).collect();
     Rng::new(settings.seed ^ node.stream(), 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
     order.truncate(settings.max_samples_per_network);
-    let (input_min, input_max) = node.input_ranges(scene);
+    let (input_min, input_max) = input_ranges(scene, object);
     let target = |s: &Sample| s.target(component);
     let rms = {
         let sum: f64 = order.iter().flat_map(|&i| target(samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
@@ -123,13 +127,20 @@ pub fn network_data(
     };
     let validation_count = ((order.len() as f32 * settings.validation_fraction) as usize).max(1);
     let (mut train, mut validation) = (Dataset::default(), Dataset::default());
+    let mut noise = 0.0f64;
     for (n, &i) in order.iter().enumerate() {
         let s = samples[i];
-        let set = if n < validation_count { &mut validation } else { &mut train };
+        let set = if n < validation_count {
+            noise += f64::from(s.noise(component));
+            &mut validation
+        } else {
+            &mut train
+        };
         set.inputs.push(std::array::from_fn(|k| normalize(s.inputs[k], input_min[k], input_max[k])));
         set.targets.push(target(s).map(|v| v / rms));
     }
-    NetworkData { train, validation, input_min, input_max, output_scale: rms }
+    let validation_noise = noise / validation.len().max(1) as f64 / (f64::from(rms) * f64::from(rms));
+    NetworkData { train, validation, input_min, input_max, output_scale: rms, validation_noise }
 }
 
 /// `object`'s networks of `component` from its `samples`: one, or one per leaf of its kd-tree,
@@ -141,9 +152,11 @@ pub fn train_tree(
     component: Component,
     samples: &[&Sample],
 ) -> Vec<(Network, NetworkInfo)> {
-    grow(scene, settings, object, component, Node::root(scene, object), samples, 0)
+    grow(scene, settings, object, component, Node::root(scene, object), samples, None)
 }
 
+/// Trains `node`'s network, starting from `parent`'s if it has one, and splits it while the
+/// bake's settings allow and its error calls for it.
 fn grow(
     scene: &Scene,
     settings: &BakeSettings,
@@ -151,10 +164,11 @@ fn grow(
     component: Component,
     node: Node,
     samples: &[&Sample],
-    depth: u32,
+    parent: Option<&Network>,
 ) -> Vec<(Network, NetworkInfo)> {
-    let (network, info, error) = train_network(scene, settings, object, component, &node, samples);
-    if depth >= settings.split_depth || error <= settings.split_above {
+    let depth = node.region.0.len() as u32;
+    let (network, info, excess) = train_network(scene, settings, object, component, &node, samples, parent);
+    if depth >= settings.split_depth || excess <= settings.split_above {
         return vec![(network, info)];
     }
     let halves = node.children().map(|child| {
@@ -167,8 +181,8 @@ fn grow(
     }
     let [(low, low_samples), (high, high_samples)] = halves;
     let (mut leaves, high) = rayon::join(
-        || grow(scene, settings, object, component, low, &low_samples, depth + 1),
-        || grow(scene, settings, object, component, high, &high_samples, depth + 1),
+        || grow(scene, settings, object, component, low, &low_samples, Some(&network)),
+        || grow(scene, settings, object, component, high, &high_samples, Some(&network)),
     );
     leaves.extend(high);
     leaves
@@ -178,8 +192,14 @@ fn position(s: &Sample) -> Vec3 {
     Vec3::new(s.inputs[0], s.inputs[1], s.inputs[2])
 }
 
-/// One network on `node`'s samples, its record, and its validation error relative to the
-/// mean square of its targets (what decides a split).
+/// One network on `node`'s samples, its record, and what of its validation error is its own
+/// (above its targets' noise), relative to the mean square of its targets: what decides a split.
+///
+/// A half of a split starts from its `parent`'s network (the same input ranges, the output
+/// rescaled to its own targets), so that Levenberg–Marquardt, which keeps the parameters with
+/// the best validation error, refines the parent where the half's samples ask for it and
+/// elsewhere stays near the parent, which learned from all of the object's samples.
+#[allow(clippy::too_many_arguments)]
 fn train_network(
     scene: &Scene,
     settings: &BakeSettings,
@@ -187,18 +207,26 @@ fn train_network(
     component: Component,
     node: &Node,
     samples: &[&Sample],
+    parent: Option<&Network>,
 ) -> (Network, NetworkInfo, f64) {
-    let NetworkData { train, validation, input_min, input_max, output_scale: rms } =
+    let NetworkData { train, validation, input_min, input_max, output_scale: rms, validation_noise } =
         network_data(scene, settings, object, component, node, samples);
     let mut mean = [0.0f32; OUTPUTS];
     for t in &train.targets {
         (0..OUTPUTS).for_each(|c| mean[c] += t[c] / train.len() as f32);
     }
-    let seed = mix64(settings.seed ^ (u64::from(object) << 8) ^ component as u64 ^ node.stream());
+    let initial = match parent {
+        Some(parent) => {
+            let mut p = parent.params.clone();
+            p[W3..].iter_mut().for_each(|v| *v *= parent.output_scale / rms);
+            p
+        }
+        None => initial_parameters(mix64(settings.seed ^ (u64::from(object) << 8) ^ component as u64), mean),
+    };
     let result = lm::train(
         &train,
         &validation,
-        initial_parameters(seed, mean),
+        initial,
         &LmSettings { max_iterations: settings.max_iterations, patience: 10 },
     );
     let name = scene.objects[object as usize].name.clone();
@@ -215,6 +243,7 @@ fn train_network(
         samples: train.len() + validation.len(),
         train_mse: result.train_mse * scale2,
         val_mse: result.val_mse * scale2,
+        val_noise: validation_noise * scale2,
         iterations: result.iterations,
     };
     let network = Network {
@@ -226,5 +255,5 @@ fn train_network(
         output_scale: rms,
         params: result.params,
     };
-    (network, info, result.val_mse)
+    (network, info, result.val_mse - validation_noise)
 }
