@@ -89,11 +89,9 @@ pub struct BakeSettings {
     /// Configurations per shard file.
     pub shard_configurations: u32,
     /// The deepest an object's kd-tree may grow (0: one network per object and component).
+    /// A network is split in two while its validation error is above its targets' noise (there
+    /// is error a better fit could remove) and each half would have `min_samples`.
     pub split_depth: u32,
-    /// A network whose validation error exceeds its targets' noise by more than this share of
-    /// their mean square is split in two (while the tree may grow and each half has
-    /// `min_samples`): the error that a better fit could remove, not the noise it cannot.
-    pub split_above: f64,
     /// Which networks to train. Written to the model and the cache keys only when not both,
     /// so that bakes of both keep the bytes they had before this setting existed.
     #[serde(skip_serializing_if = "Trained::is_both")]
@@ -117,7 +115,6 @@ impl BakeSettings {
                 validation_fraction: 0.2,
                 shard_configurations: 4,
                 split_depth: 1,
-                split_above: SPLIT_ABOVE,
                 trained: Trained::Both,
             },
             Quality::Preview => BakeSettings {
@@ -133,7 +130,6 @@ impl BakeSettings {
                 validation_fraction: 0.15,
                 shard_configurations: 8,
                 split_depth: 1,
-                split_above: SPLIT_ABOVE,
                 trained: Trained::Both,
             },
             Quality::Final => BakeSettings {
@@ -149,7 +145,6 @@ impl BakeSettings {
                 validation_fraction: 0.15,
                 shard_configurations: 8,
                 split_depth: 2,
-                split_above: SPLIT_ABOVE,
                 trained: Trained::Both,
             },
         };
@@ -572,10 +567,6 @@ fn cache_key(scene: &Scene, settings: &str) -> Fnv64 {
     key.write(settings.as_bytes());
     key
 }
-
-/// The presets' [`BakeSettings::split_above`]: a network whose validation error is over 5% of
-/// its targets' mean square is split.
-const SPLIT_ABOVE: f64 = 0.0;
 
 /// Objects that got fewer samples than this many times `min_samples` from rays over the sphere
 /// get rays aimed at them.

@@ -1,6 +1,7 @@
 //! Training one object's networks of one component: a network over the whole object, and
-//! where its validation error stays above the bake's threshold, the paper's kd-tree split
-//! ([`crate::partition`]): a network per half, recursively, up to the bake's depth.
+//! where its validation error stays above what the noise of its targets explains, the paper's
+//! kd-tree split ([`crate::partition`]): a network per half, recursively, up to the bake's
+//! depth.
 
 use glam::Vec3;
 
@@ -168,7 +169,7 @@ fn grow(
 ) -> Vec<(Network, NetworkInfo)> {
     let depth = node.region.0.len() as u32;
     let (network, info, excess) = train_network(scene, settings, object, component, &node, samples, parent);
-    if depth >= settings.split_depth || excess <= settings.split_above {
+    if depth >= settings.split_depth || excess <= 0.0 {
         return vec![(network, info)];
     }
     let halves = node.children().map(|child| {
