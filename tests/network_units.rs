@@ -29,9 +29,8 @@ fn units_partition_each_object_into_pairs_of_leaves() {
                     .iter()
                     .filter(|u| u.object == id && (0..3).all(|a| u.min[a] <= p[a] && p[a] < u.max[a]))
                     .collect();
-                let leaf = |component| {
-                    model.networks(&object.name, component).into_iter().find(|n| n.region.contains(p))
-                };
+                let leaf =
+                    |component| model.networks(&object.name, component).into_iter().find(|n| n.region.contains(p));
                 match (leaf(Component::Direct), leaf(Component::Indirect)) {
                     (Some(direct), Some(indirect)) => {
                         assert_eq!(holding.len(), 1, "{name} {} at {p}", object.name);

@@ -19,8 +19,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic_file::write_atomically;
 use crate::hash::Fnv64;
-use crate::partition::{is_partition, Region};
 use crate::network::{Component, Network, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
+use crate::partition::{is_partition, Region};
 use crate::scene::Scene;
 
 /// Version 4: an object's component may have several networks, one per leaf of a kd-tree over
@@ -250,7 +250,11 @@ impl Model {
         for info in &metadata.networks {
             let mut params = vec![0.0f32; PARAMETERS];
             if !info.region.is_valid() {
-                return Err(format!("network {}/{}: a region's split is not on axis 0-2 at a finite position", info.object, info.component.name()));
+                return Err(format!(
+                    "network {}/{}: a region's split is not on axis 0-2 at a finite position",
+                    info.object,
+                    info.component.name()
+                ));
             }
             let prefix = tensor_prefix(&info.object, info.component, &info.region);
             for (name, shape, offset) in TENSORS {

@@ -68,7 +68,10 @@ impl Region {
 
     /// The region in a tensor name: `/x<0.25/z>=0.5` (empty for the root).
     pub fn path(&self) -> String {
-        self.0.iter().map(|s| format!("/{}{}{}", ["x", "y", "z"][s.axis as usize], ["<", ">="][usize::from(!s.below)], s.at)).collect()
+        self.0
+            .iter()
+            .map(|s| format!("/{}{}{}", ["x", "y", "z"][s.axis as usize], ["<", ">="][usize::from(!s.below)], s.at))
+            .collect()
     }
 
     /// Whether the splits are well formed: axes 0 to 2 and finite positions.
@@ -83,14 +86,15 @@ impl Region {
 pub fn is_partition(regions: &[&[Split]]) -> bool {
     match regions {
         [] => false,
-        [only] if only.is_empty() => true,
+        [[]] => true,
         _ => {
             let Some(first) = regions[0].first() else { return false };
             let same_plane = |s: &Split| s.axis == first.axis && s.at == first.at;
             if !regions.iter().all(|r| r.first().is_some_and(same_plane)) {
                 return false;
             }
-            let side = |below: bool| regions.iter().filter(|r| r[0].below == below).map(|r| &r[1..]).collect::<Vec<_>>();
+            let side =
+                |below: bool| regions.iter().filter(|r| r[0].below == below).map(|r| &r[1..]).collect::<Vec<_>>();
             is_partition(&side(true)) && is_partition(&side(false))
         }
     }

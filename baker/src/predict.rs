@@ -20,9 +20,8 @@ struct ObjectNetworks<'a> {
 
 impl<'a> ObjectNetworks<'a> {
     fn new(world: &World, model: &'a Model) -> Self {
-        let lookup = |component| {
-            world.scene.objects.iter().map(|o| model.networks(&o.name, component)).collect::<Vec<_>>()
-        };
+        let lookup =
+            |component| world.scene.objects.iter().map(|o| model.networks(&o.name, component)).collect::<Vec<_>>();
         ObjectNetworks { direct: lookup(Component::Direct), indirect: lookup(Component::Indirect) }
     }
 }

@@ -106,10 +106,7 @@ pub struct NetworkUnit<'a> {
 impl NetworkUnit<'_> {
     fn check(&self, objects: usize) -> Result<()> {
         if self.direct.params.len() != PARAMETERS || self.indirect.params.len() != PARAMETERS {
-            return Err(Error::Invalid(format!(
-                "object {}: a network must have {PARAMETERS} parameters",
-                self.object
-            )));
+            return Err(Error::Invalid(format!("object {}: a network must have {PARAMETERS} parameters", self.object)));
         }
         if self.object >= objects {
             return Err(Error::Invalid(format!("a network unit of object {}, of {objects} objects", self.object)));

@@ -173,8 +173,7 @@ impl Bench<'_> {
         let objects = objects.expect("read after timing")?;
         let [gbuffer, network, tonemap, _rest] = &stats.gpu_ms;
         // Networks evaluated per frame: two per pixel of an object that has them.
-        let trained: Vec<bool> =
-            scene.objects.iter().map(|o| model.has(&o.name, Component::Direct)).collect();
+        let trained: Vec<bool> = scene.objects.iter().map(|o| model.has(&o.name, Component::Direct)).collect();
         // Analytic direct light computes direct light instead of evaluating its network.
         let per_pixel = if args.direct == Direct::Analytic { 1 } else { 2 };
         let evaluations = per_pixel * objects.iter().filter(|&&id| id > 0 && trained[id as usize - 1]).count();

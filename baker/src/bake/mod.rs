@@ -32,10 +32,10 @@ use crate::scene::{BakeOverrides, Scene};
 use crate::trace::integrator::non_finite_dropped;
 use crate::trace::sampling::mix64;
 use crate::trace::{Geometry, TraceSettings};
-pub use train::{network_data, NetworkData, Node};
-use train::train_tree;
 use samples::{latin_hypercube, sample_configuration, Aim, Sample, SurfacePoints, SAMPLE_BYTES};
 use serde::Deserialize;
+use train::train_tree;
+pub use train::{network_data, NetworkData, Node};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
@@ -503,10 +503,11 @@ pub fn bake_part(
             key.write(&[component as u8]);
             key.write(&object.to_le_bytes());
             let path = cache.join(format!("network-{object:05}-{}.bin", component.name()));
-            let checkpoint: Option<Vec<(Network, NetworkInfo)>> = cache::read(&path, NETWORK_MAGIC, key.0, &corrupt, |bytes| {
-                let Checkpoint { leaves } = serde_json::from_slice(bytes).ok()?;
-                leaves.into_iter().map(|Leaf { info, params }| Some((info.network(params)?, info))).collect()
-            });
+            let checkpoint: Option<Vec<(Network, NetworkInfo)>> =
+                cache::read(&path, NETWORK_MAGIC, key.0, &corrupt, |bytes| {
+                    let Checkpoint { leaves } = serde_json::from_slice(bytes).ok()?;
+                    leaves.into_iter().map(|Leaf { info, params }| Some((info.network(params)?, info))).collect()
+                });
             let leaves = match checkpoint {
                 Some(resumed) => {
                     resumed_networks.fetch_add(resumed.len(), Ordering::SeqCst);
@@ -518,7 +519,10 @@ pub fn bake_part(
                 None => {
                     let leaves = train_tree(scene, settings, object, component, &by_object[object as usize]);
                     let checkpoint = Checkpoint {
-                        leaves: leaves.iter().map(|(n, info)| Leaf { info: info.clone(), params: n.params.clone() }).collect(),
+                        leaves: leaves
+                            .iter()
+                            .map(|(n, info)| Leaf { info: info.clone(), params: n.params.clone() })
+                            .collect(),
                     };
                     let json = serde_json::to_vec(&checkpoint).expect("checkpoint serialises");
                     cache::write(&path, NETWORK_MAGIC, key.0, &json)?;

@@ -41,7 +41,13 @@ impl Node {
     /// The two halves, split at the midpoint of the longest side (the paper's rule).
     fn children(&self) -> [Node; 2] {
         let size = self.bounds.max - self.bounds.min;
-        let axis = if size.x >= size.y && size.x >= size.z { 0 } else if size.y >= size.z { 1 } else { 2 };
+        let axis = if size.x >= size.y && size.x >= size.z {
+            0
+        } else if size.y >= size.z {
+            1
+        } else {
+            2
+        };
         let at = 0.5 * (self.bounds.min[axis] + self.bounds.max[axis]);
         let (mut low, mut high) = (self.bounds, self.bounds);
         low.max[axis] = at;
@@ -59,7 +65,9 @@ impl Node {
         let (min, max) = self.region.bounds();
         let open = |bound: f32, grown: f32, infinity: f32| if bound.abs() == f32::MAX { infinity } else { grown };
         Aabb {
-            min: Vec3::from_array(std::array::from_fn(|a| open(min[a], self.bounds.min[a] - grow[a], f32::NEG_INFINITY))),
+            min: Vec3::from_array(std::array::from_fn(|a| {
+                open(min[a], self.bounds.min[a] - grow[a], f32::NEG_INFINITY)
+            })),
             max: Vec3::from_array(std::array::from_fn(|a| open(max[a], self.bounds.max[a] + grow[a], f32::INFINITY))),
         }
     }
@@ -267,12 +275,8 @@ fn train_network(
         }
         None => initial_parameters(mix64(settings.seed ^ (u64::from(object) << 8) ^ component as u64), mean),
     };
-    let result = lm::train(
-        &train,
-        &validation,
-        initial,
-        &LmSettings { max_iterations: settings.max_iterations, patience: 10 },
-    );
+    let result =
+        lm::train(&train, &validation, initial, &LmSettings { max_iterations: settings.max_iterations, patience: 10 });
     let name = scene.objects[object as usize].name.clone();
     // Errors in radiance units.
     let scale2 = f64::from(rms) * f64::from(rms);
