@@ -159,7 +159,7 @@ fn analytic_direct_needs_no_direct_networks() {
     let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
     let mut indirect_only = model.clone();
     indirect_only.networks.retain(|n| n.component == Component::Indirect);
-    assert!(indirect_only.networks.len() * 2 == model.networks.len());
+    assert!(!indirect_only.networks.is_empty() && indirect_only.networks.len() < model.networks.len());
     let ctx = gpu();
     let extent = vk::Extent2D { width: 64, height: 48 };
     let settings = FrameSettings {

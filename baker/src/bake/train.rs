@@ -170,9 +170,19 @@ pub fn train_tree(
     component: Component,
     samples: &[&Sample],
 ) -> Vec<(Network, NetworkInfo)> {
+    let tree = Tree { scene, settings, object, component };
     let root = Node::root(scene, object);
-    let trained = train_network(scene, settings, object, component, &root, samples, None);
-    grow(scene, settings, object, component, root, samples, trained)
+    let trained = train_network(tree, &root, samples, None);
+    grow(tree, root, samples, trained)
+}
+
+/// What one tree learns: an object's component, in a bake of `scene` with `settings`.
+#[derive(Clone, Copy)]
+struct Tree<'a> {
+    scene: &'a Scene,
+    settings: &'a BakeSettings,
+    object: u32,
+    component: Component,
 }
 
 /// A trained network, its record, and what of its validation error is its own (above its
@@ -187,17 +197,9 @@ struct Trained {
 /// each grown in turn. A node is split while the tree may grow, its network's error is above
 /// its targets' noise, each half has `min_samples`, and the halves agree where they meet
 /// ([`MAX_SEAM`]).
-fn grow(
-    scene: &Scene,
-    settings: &BakeSettings,
-    object: u32,
-    component: Component,
-    node: Node,
-    samples: &[&Sample],
-    trained: Trained,
-) -> Vec<(Network, NetworkInfo)> {
+fn grow(tree: Tree, node: Node, samples: &[&Sample], trained: Trained) -> Vec<(Network, NetworkInfo)> {
     let depth = node.region.0.len() as u32;
-    if depth >= settings.split_depth || trained.excess <= 0.0 {
+    if depth >= tree.settings.split_depth || trained.excess <= 0.0 {
         return vec![(trained.network, trained.info)];
     }
     let halves = node.children().map(|child| {
@@ -205,13 +207,11 @@ fn grow(
         let inside: Vec<&Sample> = samples.iter().copied().filter(|s| b.contains(position(s))).collect();
         (child, inside)
     });
-    if halves.iter().any(|(_, inside)| inside.len() < settings.min_samples) {
+    if halves.iter().any(|(_, inside)| inside.len() < tree.settings.min_samples) {
         return vec![(trained.network, trained.info)];
     }
     let [(low, low_samples), (high, high_samples)] = halves;
-    let half = |node: &Node, samples: &[&Sample]| {
-        train_network(scene, settings, object, component, node, samples, Some(&trained.network))
-    };
+    let half = |node: &Node, samples: &[&Sample]| train_network(tree, node, samples, Some(&trained.network));
     let (low_trained, high_trained) = rayon::join(|| half(&low, &low_samples), || half(&high, &high_samples));
     // Where the halves meet, both learned the same samples; halves that disagree there would
     // trade a smooth error for a visible seam (a mirror's halves do: their reflections differ).
@@ -222,8 +222,8 @@ fn grow(
         return vec![(trained.network, trained.info)];
     }
     let (mut leaves, high) = rayon::join(
-        || grow(scene, settings, object, component, low, &low_samples, low_trained),
-        || grow(scene, settings, object, component, high, &high_samples, high_trained),
+        || grow(tree, low, &low_samples, low_trained),
+        || grow(tree, high, &high_samples, high_trained),
     );
     leaves.extend(high);
     leaves
@@ -251,16 +251,8 @@ fn position(s: &Sample) -> Vec3 {
 /// rescaled to its own targets), so that Levenberg–Marquardt, which keeps the parameters with
 /// the best validation error, refines the parent where the half's samples ask for it and
 /// elsewhere stays near the parent, which learned from all of the object's samples.
-#[allow(clippy::too_many_arguments)]
-fn train_network(
-    scene: &Scene,
-    settings: &BakeSettings,
-    object: u32,
-    component: Component,
-    node: &Node,
-    samples: &[&Sample],
-    parent: Option<&Network>,
-) -> Trained {
+fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&Network>) -> Trained {
+    let Tree { scene, settings, object, component } = tree;
     let NetworkData { train, validation, input_min, input_max, output_scale: rms, validation_noise } =
         network_data(scene, settings, object, component, node, samples);
     let mut mean = [0.0f32; OUTPUTS];
