@@ -221,10 +221,8 @@ fn grow(tree: Tree, node: Node, samples: &[&Sample], trained: Trained) -> Vec<(N
     if seam > MAX_SEAM {
         return vec![(trained.network, trained.info)];
     }
-    let (mut leaves, high) = rayon::join(
-        || grow(tree, low, &low_samples, low_trained),
-        || grow(tree, high, &high_samples, high_trained),
-    );
+    let (mut leaves, high) =
+        rayon::join(|| grow(tree, low, &low_samples, low_trained), || grow(tree, high, &high_samples, high_trained));
     leaves.extend(high);
     leaves
 }
