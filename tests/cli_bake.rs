@@ -24,7 +24,9 @@ fn bake_then_render_on_the_cpu() {
         assert!(["direct", "indirect"].contains(&n["component"].as_str().unwrap()));
         assert!(n["object"].is_string() && n["samples"].as_u64().unwrap() > 0);
         assert!(n["train_mse"].as_f64().unwrap().is_finite() && n["val_mse"].as_f64().unwrap().is_finite());
+        assert!(n["val_noise"].as_f64().unwrap() >= 0.0, "{n}");
     }
+    assert!(networks.iter().any(|n| n["region"].as_array().is_some_and(|r| !r.is_empty())), "a split: {report}");
     assert!(!dir.join("model.bake-cache").exists(), "sample shards are removed after a successful bake");
 
     let png = dir.join("frame.png");

@@ -236,7 +236,8 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         .map(|n| {
             json!({
                 "object": n.object, "component": n.component, "region": n.region, "samples": n.samples,
-                "train_mse": n.train_mse, "val_mse": n.val_mse, "iterations": n.iterations,
+                "train_mse": n.train_mse, "val_mse": n.val_mse, "val_noise": n.val_noise,
+                "iterations": n.iterations,
             })
         })
         .collect();
@@ -285,19 +286,20 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         );
     }
     eprintln!(
-        "\n  {:<18} {:<9} {:<24} {:>8} {:>11} {:>11} {:>5}",
-        "object", "component", "region", "samples", "train MSE", "val MSE", "iter"
+        "\n  {:<18} {:<9} {:<24} {:>8} {:>11} {:>11} {:>11} {:>5}",
+        "object", "component", "region", "samples", "train MSE", "val MSE", "val noise", "iter"
     );
     for n in &model.metadata.networks {
         let region = if n.region.is_whole() { "all".to_string() } else { n.region.path()[1..].to_string() };
         eprintln!(
-            "  {:<18} {:<9} {:<24} {:>8} {:>11.3e} {:>11.3e} {:>5}",
+            "  {:<18} {:<9} {:<24} {:>8} {:>11.3e} {:>11.3e} {:>11.3e} {:>5}",
             n.object,
             n.component.name(),
             region,
             n.samples,
             n.train_mse,
             n.val_mse,
+            n.val_noise,
             n.iterations
         );
     }
