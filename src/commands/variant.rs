@@ -21,11 +21,14 @@ impl ValueEnum for VariantArg {
     fn to_possible_value(&self) -> Option<PossibleValue> {
         let help = match self.0 {
             Variant::Tiled => {
-                "one pipeline per object with its weights as specialization constants, dispatched over \
-                 only the 8x8 tiles the object covers (default)"
+                "one pipeline per object (per part, for objects the bake split) with its weights as \
+                 specialization constants, dispatched over only the 8x8 tiles it covers (default)"
             }
             Variant::PerObject => "the same pipelines, each dispatched over the whole image",
-            Variant::Storage => "one pipeline; every object's weights in a storage buffer",
+            Variant::Storage => {
+                "one pipeline; every object's weights in a storage buffer, the part of a split object \
+                 found per pixel"
+            }
         };
         Some(PossibleValue::new(self.0.name()).help(help))
     }
