@@ -3,14 +3,15 @@
 //!
 //! Tensors, per network: `OBJECT/COMPONENT/w1` [20, 13], `b1` [20], `w2` [10, 20], `b2` [10],
 //! `w3` [3, 10], `b3` [3], all f32. A network of a leaf of the object's kd-tree
-//! ([`crate::partition`]) has its region's splits in the name: `OBJECT/COMPONENT/x<0.25/w1`. The metadata key `rrf` holds [`Metadata`] as JSON: the
-//! format version, the scene's content hash, per network the input ranges and the target
-//! transform, training statistics, the bake settings, and a checksum of the tensor data.
+//! ([`crate::partition`]) has its region's splits in the name: `OBJECT/COMPONENT/x<0.25/w1`.
+//! The metadata key `rrf` holds [`Metadata`] as JSON: the format version, the scene's
+//! content hash, per network its region, input ranges, target transform and training
+//! statistics, the bake settings, and a checksum of the tensor data.
 //! Nothing in the file depends on when or how fast it was baked (no timings, no dates), so
 //! the same scene, settings and seed give the same bytes: an interrupted and resumed bake is
 //! byte-identical to an uninterrupted one.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use safetensors::tensor::{Dtype, TensorView};
@@ -20,12 +21,13 @@ use serde::{Deserialize, Serialize};
 use crate::atomic_file::write_atomically;
 use crate::hash::Fnv64;
 use crate::network::{Component, Network, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
-use crate::partition::{is_partition, Region};
+use crate::partition::{is_partition, Region, Split};
 use crate::scene::Scene;
 
 /// Version 4: an object's component may have several networks, one per leaf of a kd-tree over
-/// position (`region` in [`NetworkInfo`], the splits in the tensor names). Version 3: the networks give radiance over the surface's reflectance
-/// ([`crate::network::reflectance`]), which the renderer multiplies back. Version 2: the scene
+/// position (`region` in [`NetworkInfo`], the splits in the tensor names). Version 3: the
+/// networks give radiance over the surface's reflectance ([`crate::network::reflectance`]),
+/// which the renderer multiplies back. Version 2: the scene
 /// hash covers only what shapes the samples (not the views), and no timings are recorded.
 /// Older models are refused with a message to re-bake.
 pub const FORMAT_VERSION: u32 = 4;
@@ -283,19 +285,15 @@ impl Model {
             hash.write(&tensor_bytes(&network));
             networks.push(network);
         }
+        let mut trees: BTreeMap<(&str, &str), Vec<&[Split]>> = BTreeMap::new();
         for info in &metadata.networks {
-            let regions: Vec<&[_]> = metadata
-                .networks
-                .iter()
-                .filter(|n| n.object == info.object && n.component == info.component)
-                .map(|n| n.region.0.as_slice())
-                .collect();
-            if !is_partition(&regions) {
+            trees.entry((&info.object, info.component.name())).or_default().push(&info.region.0);
+        }
+        for ((object, component), regions) in &trees {
+            if !is_partition(regions) {
                 return Err(format!(
-                    "the {} networks of {}/{} are not the leaves of one kd-tree (a gap or an overlap)",
-                    regions.len(),
-                    info.object,
-                    info.component.name()
+                    "the {} networks of {object}/{component} are not the leaves of one kd-tree (a gap or an overlap)",
+                    regions.len()
                 ));
             }
         }

@@ -179,15 +179,15 @@ fn fold(params: &[f32], input_min: &[f32; INPUTS], input_max: &[f32; INPUTS], ou
     out
 }
 
-/// Specialization constants of unit `index`'s pipeline for frames of one light or of
-/// `several` (see `network_specialized_main.glsl`).
-fn specialization(index: usize, unit: &NetworkUnit, tiled: bool, analytic: bool, several: bool) -> Specialization {
+/// Specialization constants of unit `index`'s two pipelines, for frames of one light and of
+/// several (see `network_specialized_main.glsl`).
+fn specializations(index: usize, unit: &NetworkUnit, tiled: bool, analytic: bool) -> [Specialization; 2] {
     let mut words = vec![0u32; FIRST_PARAMETER_ID + 2 * PARAMETERS];
     words[0] = unit.object as u32 + 1;
     words[1] = u32::from(tiled);
     words[2] = u32::from(analytic);
-    words[3] = u32::from(several);
     words[4] = index as u32;
+    // BOX_MIN_X … BOX_MAX_Z.
     for (word, value) in words[5..11].iter_mut().zip(unit.min.iter().chain(&unit.max)) {
         *word = value.to_bits();
     }
@@ -195,7 +195,10 @@ fn specialization(index: usize, unit: &NetworkUnit, tiled: bool, analytic: bool,
     for (word, value) in words[FIRST_PARAMETER_ID..].iter_mut().zip(direct.iter().chain(&indirect)) {
         *word = value.to_bits();
     }
-    words
+    // SEVERAL_LIGHTS.
+    let mut several = words.clone();
+    several[3] = 1;
+    [words, several]
 }
 
 /// The most lights one frame sums (the size of the lights buffer).
@@ -429,11 +432,12 @@ struct Specialized {
 
 impl NetworkPass {
     /// The pass for the network `units` of a scene of `objects` object ids (objects without a
-    /// unit get no direct or indirect light), which reads `gbuffer`. With `display` (an RGBA8 storage image of the G-buffer's size), the
-    /// pass writes only that: the component shown, tonemapped, as a window shows it; the
-    /// storage variant cannot. `materials` holds each material's emitted radiance (rgb, before
-    /// its emissive texture) and its `KHR_materials_specular` factor. `direct` says where
-    /// direct light comes from; the storage variant learns it.
+    /// unit get no direct or indirect light), which reads `gbuffer`. With `display` (an RGBA8
+    /// storage image of the G-buffer's size), the pass writes only that: the component shown,
+    /// tonemapped, as a window shows it; the storage variant cannot. `materials` holds each
+    /// material's emitted radiance (rgb, before its emissive texture) and its
+    /// `KHR_materials_specular` factor. `direct` says where direct light comes from; the
+    /// storage variant learns it.
     #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &Context,
@@ -554,9 +558,8 @@ impl NetworkPass {
         let written = Written::of(&self.outputs, display)?;
         let shared = Shared { materials: &self.materials, lights: &self.lights, units: &self.units };
         match &mut self.kind {
-            Kind::Storage { pass, weights } => {
-                pass.rebind(ctx, &network_bindings(gbuffer, shared, weights, written, Bind::StorageBuffer(&self.units)))
-            }
+            Kind::Storage { pass, weights } => pass
+                .rebind(ctx, &network_bindings(gbuffer, shared, weights, written, Bind::StorageBuffer(shared.units))),
             Kind::Specialized(s) => {
                 if let Some((tiles, capacity)) = tiles {
                     ctx.destroy_buffer(std::mem::replace(&mut s.tiles, tiles));
@@ -827,11 +830,8 @@ fn specialized(
         )));
     }
     let analytic = matches!(direct, DirectLight::Analytic { .. });
-    let specializations: Vec<Specialization> = units
-        .iter()
-        .enumerate()
-        .flat_map(|(index, unit)| [false, true].map(|several| specialization(index, unit, tiled, analytic, several)))
-        .collect();
+    let specializations: Vec<Specialization> =
+        units.iter().enumerate().flat_map(|(index, unit)| specializations(index, unit, tiled, analytic)).collect();
     let dispatch_reset: Vec<u32> = units.iter().flat_map(|_| [0, 1, 1]).collect();
 
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;

@@ -5,9 +5,10 @@
 //
 // Each workgroup is one tile. It appends the tile to the list of every unit that covers one
 // of its pixels, counting in that unit's indirect dispatch arguments, so that each unit's
-// pipeline then runs only over its own tiles. Pixels that no network
-// covers (background, objects without networks) get their final values here: with DISPLAY
-// defined (network_classify_display.comp; network_classify.comp writes the three radiance images) in the one tonemapped display image.
+// pipeline then runs only over its own tiles. Pixels that no network covers (background,
+// objects without networks) get their final values here: the three radiance images
+// (network_classify.comp), or with DISPLAY defined (network_classify_display.comp) the one
+// tonemapped display image.
 
 layout(local_size_x = 8, local_size_y = 8) in;
 

@@ -253,25 +253,26 @@ fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&N
     let Tree { scene, settings, object, component } = tree;
     let NetworkData { train, validation, input_min, input_max, output_scale: rms, validation_noise } =
         network_data(scene, settings, object, component, node, samples);
-    let mut mean = [0.0f32; OUTPUTS];
-    for t in &train.targets {
-        (0..OUTPUTS).for_each(|c| mean[c] += t[c] / train.len() as f32);
-    }
     let initial = match parent {
         Some(parent) => {
             let mut p = parent.params.clone();
             p[W3..].iter_mut().for_each(|v| *v *= parent.output_scale / rms);
             p
         }
-        None => initial_parameters(mix64(settings.seed ^ (u64::from(object) << 8) ^ component as u64), mean),
+        None => {
+            let mut mean = [0.0f32; OUTPUTS];
+            for t in &train.targets {
+                (0..OUTPUTS).for_each(|c| mean[c] += t[c] / train.len() as f32);
+            }
+            initial_parameters(mix64(settings.seed ^ (u64::from(object) << 8) ^ component as u64), mean)
+        }
     };
     let result =
         lm::train(&train, &validation, initial, &LmSettings { max_iterations: settings.max_iterations, patience: 10 });
-    let name = scene.objects[object as usize].name.clone();
     // Errors in radiance units.
     let scale2 = f64::from(rms) * f64::from(rms);
     let info = NetworkInfo {
-        object: name.clone(),
+        object: scene.objects[object as usize].name.clone(),
         component,
         region: node.region.clone(),
         input_min: input_min.to_vec(),
@@ -284,14 +285,6 @@ fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&N
         val_noise: validation_noise * scale2,
         iterations: result.iterations,
     };
-    let network = Network {
-        object: name,
-        component,
-        region: node.region.clone(),
-        input_min,
-        input_max,
-        output_scale: rms,
-        params: result.params,
-    };
+    let network = info.network(result.params).expect("13 input ranges and one network's parameters");
     Trained { network, info, excess: result.val_mse - validation_noise }
 }
