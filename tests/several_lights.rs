@@ -17,7 +17,7 @@ use rrf::gpu_frame::{rgb, Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::scene::{PlacedLight, Scene};
-use rrf_baker::trace::{render, Camera, Geometry, RenderSettings, TraceSettings, World};
+use rrf_baker::trace::{render, Camera, Footprint, Geometry, RenderSettings, TraceSettings, World};
 use rrf_renderer::network_pass::Variant;
 use rrf_renderer::vk;
 
@@ -56,6 +56,7 @@ fn two_lights_match_the_path_traced_two_light_reference() {
         spp: 256,
         trace: TraceSettings { max_depth: 8, rr_depth: Some(5) },
         seed: 7,
+        footprint: Footprint::Area,
     };
     let errors: Vec<(f64, Metrics)> = cases
         .iter()

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use rrf_baker::scene::Scene;
-use rrf_baker::trace::{render, Camera, Geometry, RenderSettings, TraceSettings, World};
+use rrf_baker::trace::{render, Camera, Footprint, Geometry, RenderSettings, TraceSettings, World};
 
 fn main() {
     let spp = std::env::args().skip_while(|a| a != "--spp").nth(1).and_then(|s| s.parse().ok()).unwrap_or(256u32);
@@ -25,6 +25,7 @@ fn main() {
         spp,
         trace: TraceSettings { max_depth: 8, rr_depth: Some(5) },
         seed: 0,
+        footprint: Footprint::Area,
     };
     let paths = 256.0 * 256.0 * f64::from(spp);
     println!("cornell-box 256x256, {spp} spp, max depth 8, roulette from 5; BVH build {bvh_ms:.2} ms");

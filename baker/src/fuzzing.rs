@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use crate::model::Model;
 use crate::scene::{Scene, Sidecar};
-use crate::trace::{render, Camera, Geometry, RenderSettings, TraceSettings, World};
+use crate::trace::{render, Camera, Footprint, Geometry, RenderSettings, TraceSettings, World};
 
 /// The model loader.
 pub fn model(data: &[u8]) {
@@ -36,6 +36,7 @@ pub fn gltf(data: &[u8]) {
             spp: 1,
             trace: TraceSettings { max_depth: 3, rr_depth: None },
             seed: 0,
+            footprint: Footprint::Area,
         };
         render(&world, &Camera::new(view, 1.0), &settings, &|_| {});
     }

@@ -5,13 +5,15 @@ use std::f32::consts::PI;
 use std::path::{Path, PathBuf};
 
 use rrf_baker::glam::{Vec2, Vec3, Vec4};
+use rrf_baker::model::Model;
+use rrf_baker::predict::{predict_image, Direct};
 use rrf_baker::scene::{
     Aabb, AlphaMode, BakePresets, ColorSpace, Cone, LightKind, Material, MovingLight, Object, Part, PlacedLight,
     PointLight, Scene, Texture, TextureRef, UvTransform, View,
 };
 use rrf_baker::trace::integrator::trace_ray;
 use rrf_baker::trace::sampling::Rng;
-use rrf_baker::trace::{render, Camera, Geometry, Radiance, RenderSettings, TraceSettings, World};
+use rrf_baker::trace::{render, Camera, Footprint, Geometry, Radiance, RenderSettings, TraceSettings, World};
 
 fn material(base: f32, emission: f32) -> Material {
     Material {
@@ -179,6 +181,7 @@ fn white_furnace() {
         spp: 128,
         trace: TraceSettings { max_depth: 64, rr_depth: None },
         seed: 1,
+        footprint: Footprint::Area,
     };
     let image = render(&world, &camera, &settings, &|_| {});
     let values: Vec<Vec3> = image.component(|r| r.gi());
@@ -513,7 +516,14 @@ fn components_split_the_same_paths() {
     let geometry = Geometry::new(&scene);
     let world = World::new(&scene, &geometry, None);
     let camera = Camera::new(&scene.views[0], 1.0);
-    let base = RenderSettings { width: 32, height: 32, spp: 8, trace: TraceSettings::default(), seed: 5 };
+    let base = RenderSettings {
+        width: 32,
+        height: 32,
+        spp: 8,
+        trace: TraceSettings::default(),
+        seed: 5,
+        footprint: Footprint::Area,
+    };
     let deep = render(&world, &camera, &base, &|_| {});
     let shallow = render(
         &world,
@@ -540,12 +550,44 @@ fn same_seed_same_image_different_seed_different_image() {
     let geometry = Geometry::new(&scene);
     let world = World::new(&scene, &geometry, None);
     let camera = Camera::new(&scene.views[0], 1.0);
-    let s = RenderSettings { width: 24, height: 16, spp: 4, trace: TraceSettings::default(), seed: 9 };
+    let s = RenderSettings {
+        width: 24,
+        height: 16,
+        spp: 4,
+        trace: TraceSettings::default(),
+        seed: 9,
+        footprint: Footprint::Area,
+    };
     let a = render(&world, &camera, &s, &|_| {});
     let b = render(&world, &camera, &s, &|_| {});
     let c = render(&world, &camera, &RenderSettings { seed: 10, ..s }, &|_| {});
     assert!(a.pixels == b.pixels);
     assert!(a.pixels != c.pixels);
+}
+
+/// A centre-footprint image traces each pixel's centre ray, the one the renderer's G-buffer
+/// (and its CPU twin, `predict_image`) shades: their emitted light agrees pixel for pixel, the
+/// light's rim included, where an area-footprint image blends the rim's pixels with the
+/// ceiling.
+#[test]
+fn centre_footprint_traces_the_renderers_rays() {
+    let scene = cornell();
+    let geometry = Geometry::new(&scene);
+    let world = World::new(&scene, &geometry, None);
+    let camera = Camera::new(&scene.views[0], 1.0);
+    let model = Model::load(&scene.model_file(), Some(&scene)).unwrap();
+    let size = 48;
+    let predicted = predict_image(&world, &camera, &model, (size, size), Direct::Learned).component(|r| r.emitted);
+    let emitted = |footprint| {
+        let trace = TraceSettings { max_depth: 1, rr_depth: None };
+        let s = RenderSettings { width: size, height: size, spp: 4, trace, seed: 3, footprint };
+        render(&world, &camera, &s, &|_| {}).component(|r| r.emitted)
+    };
+    let centre = emitted(Footprint::Centre);
+    assert!(centre.iter().any(|e| e.max_element() > 0.0), "the view sees the light");
+    assert!(centre == predicted, "the same rays see the same emission");
+    let rim = emitted(Footprint::Area).iter().zip(&centre).filter(|(a, c)| a != c).count();
+    assert!(rim > 0, "an area footprint blends the light's rim");
 }
 
 /// Moving the area light moves its light: the floor under the new position gets brighter.

@@ -15,6 +15,7 @@ use rrf_baker::trace::{Camera, Geometry, TraceSettings, World};
 use rrf_renderer::network_pass::Variant;
 use rrf_renderer::{vk, Context, ContextOptions};
 
+use super::view_args::PixelFootprint;
 use crate::eval::configs::{held_out, EvalConfig};
 use crate::eval::figure::{compose, Panel};
 use crate::eval::metrics::{compare, Baselines, Metrics};
@@ -65,6 +66,12 @@ pub struct EvalArgs {
     pub cache: Option<PathBuf>,
     #[arg(long, value_enum, default_value_t = Direct::Learned, help = super::DIRECT_HELP)]
     pub direct: Direct,
+    /// Where in its pixel each reference path starts. `centre` traces the ray whose hit the
+    /// G-buffer rasterises, so the scores are the networks' error alone; `area` scores against
+    /// antialiased references, which adds the raster's aliasing at edges and in textures (the
+    /// protocol of evals before 2026-12-02).
+    #[arg(long, value_enum, default_value_t = PixelFootprint::Centre)]
+    pub footprint: PixelFootprint,
     /// Output folder: metrics.json, index.html and one PNG per configuration.
     #[arg(short, long)]
     pub output: PathBuf,
@@ -128,6 +135,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         spp: args.spp,
         trace: TraceSettings { max_depth: MAX_DEPTH, rr_depth: Some(RR_DEPTH) },
         seed: args.seed,
+        footprint: args.footprint.into(),
     };
     eprintln!(
         "{} configurations of {} at {width}x{height}; references at {} spp, cached in {}",
@@ -232,6 +240,10 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         max_depth: MAX_DEPTH,
         rr_depth: RR_DEPTH,
         seed: args.seed,
+        footprint: match args.footprint {
+            PixelFootprint::Centre => "centre",
+            PixelFootprint::Area => "area",
+        },
         configs,
         mean,
         mean_baselines,

@@ -9,7 +9,7 @@ use rrf_baker::scene::Scene;
 use rrf_baker::trace::{render, Camera, Geometry, RenderSettings, TraceSettings, World};
 use serde_json::json;
 
-use super::view_args::{Component, ViewArgs};
+use super::view_args::{Component, PixelFootprint, ViewArgs};
 use crate::image_out::{check_output, write_image};
 use crate::progress::Progress;
 
@@ -33,6 +33,10 @@ pub struct ReferenceArgs {
     /// Random seed, any 64-bit integer: the same seed gives the same image.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Where in its pixel each path starts: `area` (antialiased) or `centre` (the ray the
+    /// renderer's G-buffer samples; what `rrf eval` scores against).
+    #[arg(long, value_enum, default_value_t = PixelFootprint::Area)]
+    pub footprint: PixelFootprint,
     /// Output: .exr (linear HDR) or .png (tonemapped).
     #[arg(short, long)]
     pub output: PathBuf,
@@ -59,6 +63,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         spp: args.spp,
         trace: TraceSettings { max_depth: args.max_depth, rr_depth: (args.rr_depth > 0).then_some(args.rr_depth) },
         seed: args.seed,
+        footprint: args.footprint.into(),
     };
 
     let progress = Progress::new(u64::from(width) * u64::from(height), "path tracing", args.json);
@@ -80,6 +85,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         "max_depth": args.max_depth,
         "component": format!("{:?}", args.component).to_lowercase(),
         "seed": args.seed,
+        "footprint": format!("{:?}", args.footprint).to_lowercase(),
         "paths": paths,
         "seconds": seconds,
         "paths_per_s": paths as f64 / seconds,

@@ -6,7 +6,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::{PlacedLight, Scene, View};
-use rrf_baker::trace::Radiance;
+use rrf_baker::trace::{Footprint, Radiance};
 
 #[derive(Args, Clone, Debug)]
 pub struct ViewArgs {
@@ -48,6 +48,25 @@ impl Component {
             Component::Direct => r.direct,
             Component::Indirect => r.indirect,
             Component::Emitted => r.emitted,
+        }
+    }
+}
+
+/// Where in its pixel each path of a path-traced image starts (`--footprint`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PixelFootprint {
+    /// Anywhere in the pixel: an antialiased (box-filtered) image.
+    Area,
+    /// Through the pixel's centre, as the renderer's G-buffer samples it: the image to score the
+    /// networks against pixel for pixel, free of the raster's aliasing at edges and in textures.
+    Centre,
+}
+
+impl From<PixelFootprint> for Footprint {
+    fn from(f: PixelFootprint) -> Footprint {
+        match f {
+            PixelFootprint::Area => Footprint::Area,
+            PixelFootprint::Centre => Footprint::Centre,
         }
     }
 }

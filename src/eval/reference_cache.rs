@@ -10,7 +10,7 @@ use anyhow::{Context as _, Result};
 use rrf_baker::glam::Vec3;
 use rrf_baker::hash::Fnv64;
 use rrf_baker::scene::Scene;
-use rrf_baker::trace::render::{render, RadianceImage, RenderSettings};
+use rrf_baker::trace::render::{render, Footprint, RadianceImage, RenderSettings};
 use rrf_baker::trace::{Camera, Geometry, Radiance, World};
 
 use super::configs::EvalConfig;
@@ -35,6 +35,11 @@ fn key(scene: &Scene, config: &EvalConfig, s: &RenderSettings) -> u64 {
         h.write(&x.to_le_bytes());
     }
     h.write(&s.seed.to_le_bytes());
+    // Area-footprint keys stay what they were before the footprint existed, so that the
+    // references cached then are still found.
+    if s.footprint == Footprint::Centre {
+        h.write(b"centre");
+    }
     h.0
 }
 

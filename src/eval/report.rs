@@ -67,6 +67,8 @@ pub struct Report {
     pub max_depth: u32,
     pub rr_depth: u32,
     pub seed: u64,
+    /// Where in its pixel each reference path starts: "centre" or "area".
+    pub footprint: &'static str,
     pub configs: Vec<ConfigReport>,
     pub mean: ComponentMetrics,
     pub mean_baselines: Baselines,

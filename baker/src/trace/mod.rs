@@ -11,5 +11,5 @@ pub mod world;
 pub use camera::Camera;
 pub use geometry::Geometry;
 pub use integrator::{Radiance, TraceSettings};
-pub use render::{render, RadianceImage, RenderSettings};
+pub use render::{render, Footprint, RadianceImage, RenderSettings};
 pub use world::World;

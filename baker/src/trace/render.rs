@@ -17,6 +17,20 @@ pub struct RenderSettings {
     pub spp: u32,
     pub trace: TraceSettings,
     pub seed: u64,
+    pub footprint: Footprint,
+}
+
+/// Where in its pixel each path starts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Footprint {
+    /// Anywhere in the pixel's square, uniformly: a box-filtered, antialiased image.
+    #[default]
+    Area,
+    /// Through the pixel's centre: the one ray whose hit the rasterised G-buffer stores, so
+    /// that the image converges to what the renderer's networks should output pixel for pixel,
+    /// and a comparison with it scores the shading, not the raster's aliasing of edges and
+    /// textures.
+    Centre,
 }
 
 /// An image of per-pixel radiance by component, rows top to bottom.
@@ -73,7 +87,11 @@ fn render_pixel(world: &World, camera: &Camera, s: &RenderSettings, x: u32, y: u
     for sample in 0..s.spp {
         // One stream per path, so that a path's length never shifts another path's numbers.
         let mut rng = Rng::new(s.seed, pixel * u64::from(s.spp) + u64::from(sample));
-        let film = (Vec2::new(x as f32, y as f32) + rng.next_vec2()) / size;
+        let offset = match s.footprint {
+            Footprint::Area => rng.next_vec2(),
+            Footprint::Centre => Vec2::splat(0.5),
+        };
+        let film = (Vec2::new(x as f32, y as f32) + offset) / size;
         sum += trace_ray(world, camera.eye, camera.direction(film), &s.trace, &mut rng);
     }
     sum.scaled(1.0 / s.spp.max(1) as f32)
