@@ -240,10 +240,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         max_depth: MAX_DEPTH,
         rr_depth: RR_DEPTH,
         seed: args.seed,
-        footprint: match args.footprint {
-            PixelFootprint::Centre => "centre",
-            PixelFootprint::Area => "area",
-        },
+        footprint: args.footprint.name(),
         configs,
         mean,
         mean_baselines,

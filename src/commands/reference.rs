@@ -85,7 +85,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
         "max_depth": args.max_depth,
         "component": format!("{:?}", args.component).to_lowercase(),
         "seed": args.seed,
-        "footprint": format!("{:?}", args.footprint).to_lowercase(),
+        "footprint": args.footprint.name(),
         "paths": paths,
         "seconds": seconds,
         "paths_per_s": paths as f64 / seconds,

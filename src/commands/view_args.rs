@@ -62,6 +62,16 @@ pub enum PixelFootprint {
     Centre,
 }
 
+impl PixelFootprint {
+    /// The flag's value, as reports and JSON name it.
+    pub fn name(self) -> &'static str {
+        match self {
+            PixelFootprint::Area => "area",
+            PixelFootprint::Centre => "centre",
+        }
+    }
+}
+
 impl From<PixelFootprint> for Footprint {
     fn from(f: PixelFootprint) -> Footprint {
         match f {
