@@ -184,20 +184,18 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             };
             let predicted = predict(&predictor, &scene, &geometry, &model, config, width, height)?;
             let figure = format!("{:02}-{}.png", i, config.name);
-            let Scores { metrics, baselines } = evaluate(
-                &predicted,
-                &truth.pixels,
-                (width, height),
-                settings.spp,
-                &args.output.join(&figure),
-            )?;
+            let Scores { metrics, baselines } =
+                evaluate(&predicted, &truth.pixels, (width, height), settings.spp, &args.output.join(&figure))?;
             eprintln!(
-                "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4} (floor {:.4} at {} spp; black {:.4}, mean colour {:.4}){}",
+                "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4} HDR-FLIP {:.4} (floor {:.4} / {:.4} at {} spp; \
+                 black {:.4}, mean colour {:.4}){}",
                 config.name,
                 metrics.gi.relmse,
                 metrics.gi.psnr,
                 metrics.gi.flip,
+                metrics.gi.hdr_flip,
                 floor.flip,
+                floor.hdr_flip,
                 settings.spp,
                 baselines.black.flip,
                 baselines.mean_colour.flip,
@@ -247,18 +245,17 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         mean_floor,
     };
     report::write(&args.output, &report)?;
-    println!("{:<10} {:>10} {:>9} {:>8}", "component", "relMSE", "PSNR dB", "FLIP");
+    println!("{:<10} {:>10} {:>9} {:>8} {:>9}", "component", "relMSE", "PSNR dB", "FLIP", "HDR-FLIP");
+    let line = |name: &str, m: Metrics, note: &str| {
+        println!("{name:<10} {:>10.4} {:>9.2} {:>8.4} {:>9.4}{note}", m.relmse, m.psnr, m.flip, m.hdr_flip)
+    };
     for (name, m) in [("gi", mean.gi), ("direct", mean.direct), ("indirect", mean.indirect)] {
-        println!("{name:<10} {:>10.4} {:>9.2} {:>8.4}", m.relmse, m.psnr, m.flip);
+        line(name, m, "");
     }
     for (name, m) in [("black", mean_baselines.black), ("mean colour", mean_baselines.mean_colour)] {
-        println!("{:<10} {:>10.4} {:>9.2} {:>8.4}  (trivial prediction of gi)", name, m.relmse, m.psnr, m.flip);
+        line(name, m, "  (trivial prediction of gi)");
     }
-    let m = mean_floor;
-    println!(
-        "{:<10} {:>10.4} {:>9.2} {:>8.4}  (a second reference against the first)",
-        "floor", m.relmse, m.psnr, m.flip
-    );
+    line("floor", mean_floor, "  (a second reference against the first)");
     eprintln!("wrote {}", args.output.join("index.html").display());
     Ok(())
 }
@@ -358,7 +355,12 @@ fn evaluate(
     let panels: Vec<Panel> = labels.iter().zip(&images).map(|(label, rgb)| Panel { label, rgb }).collect();
     let footer: Vec<String> = [("global", metrics.gi), ("direct", metrics.direct), ("indirect", metrics.indirect)]
         .iter()
-        .map(|(name, m)| format!("{name:<8} relMSE {:.4}  PSNR {:5.2} dB  FLIP {:.4}", m.relmse, m.psnr, m.flip))
+        .map(|(name, m)| {
+            format!(
+                "{name:<8} relMSE {:.4}  PSNR {:5.2} dB  FLIP {:.4}  HDR-FLIP {:.4}",
+                m.relmse, m.psnr, m.flip, m.hdr_flip
+            )
+        })
         .collect();
     compose(&panels, &gi.flip_map, width, height, &footer)
         .save(figure)

@@ -1,9 +1,10 @@
-//! Image metrics of a prediction against its reference: relMSE on linear radiance, and PSNR
-//! and FLIP on the tonemapped 8-bit images a person would look at.
+//! Image metrics of a prediction against its reference: relMSE and HDR-FLIP on linear
+//! radiance, and PSNR and FLIP on the tonemapped 8-bit images a person would look at.
 
 use rrf_baker::glam::Vec3;
 use serde::Serialize;
 
+use super::hdr_flip::hdr_flip;
 use crate::image_out::tonemap_rgb8;
 
 #[derive(Clone, Copy, Debug, Default, Serialize)]
@@ -14,6 +15,8 @@ pub struct Metrics {
     pub psnr: f64,
     /// Mean FLIP error (NVIDIA's LDR-FLIP, 67 pixels per degree) of the tonemapped images.
     pub flip: f64,
+    /// Mean HDR-FLIP error of the linear images ([`hdr_flip`]), the published methods' metric.
+    pub hdr_flip: f64,
 }
 
 impl Metrics {
@@ -24,12 +27,14 @@ impl Metrics {
             sum.relmse += m.relmse;
             sum.psnr += m.psnr;
             sum.flip += m.flip;
+            sum.hdr_flip += m.hdr_flip;
             n += 1.0;
         }
         if n > 0.0 {
             sum.relmse /= n;
             sum.psnr /= n;
             sum.flip /= n;
+            sum.hdr_flip /= n;
         }
         sum
     }
@@ -88,7 +93,8 @@ pub fn compare(predicted: &[Vec3], reference: &[Vec3], width: u32, height: u32) 
         nv_flip::DEFAULT_PIXELS_PER_DEGREE,
     );
     let flip = f64::from(nv_flip::FlipPool::from_image(&error).mean());
-    Comparison { metrics: Metrics { relmse, psnr, flip }, flip_map: error.to_vec() }
+    let hdr_flip = hdr_flip(predicted, reference, width, height);
+    Comparison { metrics: Metrics { relmse, psnr, flip, hdr_flip }, flip_map: error.to_vec() }
 }
 
 #[cfg(test)]
@@ -99,7 +105,7 @@ mod tests {
     fn identical_images_score_perfectly() {
         let image: Vec<Vec3> = (0..64).map(|i| Vec3::splat(i as f32 / 64.0)).collect();
         let m = compare(&image, &image, 8, 8).metrics;
-        assert_eq!((m.relmse, m.psnr, m.flip), (0.0, 100.0, 0.0));
+        assert_eq!((m.relmse, m.psnr, m.flip, m.hdr_flip), (0.0, 100.0, 0.0, 0.0));
     }
 
     #[test]
@@ -117,6 +123,6 @@ mod tests {
         let near: Vec<Vec3> = truth.iter().map(|v| *v * 1.02).collect();
         let far: Vec<Vec3> = truth.iter().map(|v| *v * 1.5).collect();
         let (a, b) = (compare(&near, &truth, 16, 16).metrics, compare(&far, &truth, 16, 16).metrics);
-        assert!(a.relmse < b.relmse && a.psnr > b.psnr && a.flip < b.flip, "{a:?} {b:?}");
+        assert!(a.relmse < b.relmse && a.psnr > b.psnr && a.flip < b.flip && a.hdr_flip < b.hdr_flip, "{a:?} {b:?}");
     }
 }

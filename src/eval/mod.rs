@@ -2,6 +2,7 @@
 
 pub mod configs;
 pub mod figure;
+pub mod hdr_flip;
 pub mod metrics;
 pub mod reference_cache;
 pub mod report;

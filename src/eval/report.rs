@@ -87,7 +87,11 @@ pub fn write(dir: &Path, report: &Report) -> Result<()> {
 fn row(out: &mut String, label: &str, m: &ComponentMetrics) {
     let _ = write!(out, "<tr><th>{label}</th>");
     for (_, x) in m.by_name() {
-        let _ = write!(out, "<td>{:.4}</td><td>{:.2}</td><td>{:.4}</td>", x.relmse, x.psnr, x.flip);
+        let _ = write!(
+            out,
+            "<td>{:.4}</td><td>{:.2}</td><td>{:.4}</td><td>{:.4}</td>",
+            x.relmse, x.psnr, x.flip, x.hdr_flip
+        );
     }
     out.push_str("</tr>\n");
 }
@@ -113,11 +117,11 @@ fn page(r: &Report) -> String {
         seed = r.seed,
     );
     s.push_str(
-        "<table>\n<tr><th></th><th colspan=3>gi</th><th colspan=3>direct</th><th colspan=3>indirect</th></tr>\n\
+        "<table>\n<tr><th></th><th colspan=4>gi</th><th colspan=4>direct</th><th colspan=4>indirect</th></tr>\n\
          <tr><th>configuration</th>",
     );
     for _ in 0..3 {
-        s.push_str("<th>relMSE</th><th>PSNR dB</th><th>FLIP</th>");
+        s.push_str("<th>relMSE</th><th>PSNR dB</th><th>FLIP</th><th>HDR-FLIP</th>");
     }
     s.push_str("</tr>\n");
     row(&mut s, "mean", &r.mean);
@@ -130,18 +134,18 @@ fn page(r: &Report) -> String {
          against the first (below it, error cannot be told from the references' noise). Black and mean \
          colour: trivial predictions, which a model must beat by far.</p>\n<table>\n\
          <tr><th>configuration</th><th>model FLIP</th><th>floor FLIP</th><th>black FLIP</th>\
-         <th>mean colour FLIP</th></tr>\n",
+         <th>mean colour FLIP</th><th>model HDR-FLIP</th><th>floor HDR-FLIP</th></tr>\n",
     );
-    let yardsticks = |s: &mut String, name: &str, model: f64, floor: f64, baselines: &Baselines| {
+    let yardsticks = |s: &mut String, name: &str, model: &Metrics, floor: &Metrics, baselines: &Baselines| {
         let _ = writeln!(
             s,
-            "<tr><th>{name}</th><td>{model:.4}</td><td>{floor:.4}</td><td>{:.4}</td><td>{:.4}</td></tr>",
-            baselines.black.flip, baselines.mean_colour.flip
+            "<tr><th>{name}</th><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td><td>{:.4}</td></tr>",
+            model.flip, floor.flip, baselines.black.flip, baselines.mean_colour.flip, model.hdr_flip, floor.hdr_flip
         );
     };
-    yardsticks(&mut s, "mean", r.mean.gi.flip, r.mean_floor.flip, &r.mean_baselines);
+    yardsticks(&mut s, "mean", &r.mean.gi, &r.mean_floor, &r.mean_baselines);
     for c in &r.configs {
-        yardsticks(&mut s, &c.name, c.metrics.gi.flip, c.floor.flip, &c.baselines);
+        yardsticks(&mut s, &c.name, &c.metrics.gi, &c.floor, &c.baselines);
     }
     s.push_str("</table>\n");
     for c in &r.configs {
