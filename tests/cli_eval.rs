@@ -93,6 +93,27 @@ fn eval_reports_metrics_figures_and_caches_references() {
     let report = eval(&zero_path, &dir.join("eval-zero"), &[]);
     let configs = report["configs"].as_array().unwrap();
     assert!(!configs.iter().any(beats_trivial_predictions), "a zero model must fail: {report}");
+
+    // Without --spp, the references take the sidecar's [eval] spp.
+    let copy = dir.join("cornell-copy");
+    std::fs::create_dir_all(&copy).unwrap();
+    for file in ["scene.gltf", "scene.bin"] {
+        std::fs::copy(Path::new("scenes/cornell-box").join(file), copy.join(file)).unwrap();
+    }
+    let sidecar = std::fs::read_to_string("scenes/cornell-box/scene.toml").unwrap();
+    let sidecar = sidecar.split("[eval]").next().unwrap().to_string() + "[eval]\nspp = 6\n";
+    std::fs::write(copy.join("scene.toml"), sidecar).unwrap();
+    let report_dir = dir.join("eval-sidecar");
+    #[rustfmt::skip]
+    let args = [
+        "eval", copy.to_str().unwrap(), "--model", model.to_str().unwrap(), "--configs", "0", "--size", "48x32",
+        "--cache", cache.to_str().unwrap(), "-o", report_dir.to_str().unwrap(),
+    ];
+    let out = rrf(&args, &[("RRF_VALIDATION", "required")]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report_dir.join("metrics.json")).unwrap()).unwrap();
+    assert_eq!(report["spp"], 6, "{report}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -100,11 +121,11 @@ fn eval_reports_metrics_figures_and_caches_references() {
 fn finite(metrics: &serde_json::Value) {
     for component in ["gi", "direct", "indirect"] {
         let m = &metrics[component];
-        let (relmse, psnr, flip) =
-            (m["relmse"].as_f64().unwrap(), m["psnr"].as_f64().unwrap(), m["flip"].as_f64().unwrap());
+        let value = |key: &str| m[key].as_f64().unwrap();
+        let (relmse, psnr) = (value("relmse"), value("psnr"));
         assert!(relmse.is_finite() && relmse >= 0.0, "{component}: {m}");
         assert!(psnr.is_finite() && psnr > 0.0 && psnr <= 100.0, "{component}: {m}");
-        assert!((0.0..=1.0).contains(&flip), "{component}: {m}");
+        assert!((0.0..=1.0).contains(&value("flip")) && (0.0..=1.0).contains(&value("hdr_flip")), "{component}: {m}");
     }
 }
 

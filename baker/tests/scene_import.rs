@@ -646,6 +646,18 @@ fn sidecar_bake_overrides_out_of_range() {
 }
 
 #[test]
+fn sidecar_eval_spp() {
+    let dir = cornell_with_sidecar("eval-spp", "[eval]\nspp = 2048\n");
+    let scene = Scene::load(&dir).unwrap();
+    assert_eq!(scene.eval.spp, Some(2048));
+    let without = Scene::load(&cornell_with_sidecar("no-eval", "")).unwrap();
+    assert_eq!(without.eval.spp, None);
+    assert_eq!(scene.content_hash, without.content_hash, "eval defaults do not call for a re-bake");
+    let message = load_err(&cornell_with_sidecar("zero-spp", "[eval]\nspp = 0\n"));
+    assert!(message.contains("scene.toml") && message.contains("eval.spp"), "{message}");
+}
+
+#[test]
 fn sidecar_box_far_from_the_origin() {
     let dir = cornell_with_sidecar("huge-box", "[camera]\nmin = [-1e38, 0, 0]\nmax = [1e38, 1, 1]\n");
     let message = load_err(&dir);

@@ -8,7 +8,7 @@ use clap::Args;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
-use rrf_baker::scene::{PlacedLight, Scene};
+use rrf_baker::scene::{EvalDefaults, PlacedLight, Scene};
 use rrf_baker::trace::render::RenderSettings;
 use rrf_baker::trace::sampling::mix64;
 use rrf_baker::trace::{Camera, Geometry, TraceSettings, World};
@@ -40,10 +40,10 @@ pub struct EvalArgs {
     /// per named view of the sidecar; 0 to 10,000.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=10_000))]
     pub configs: u32,
-    /// Samples per pixel of the path-traced references (cached under the scene's .cache/);
-    /// 1 to 1,048,576.
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
-    pub spp: u32,
+    /// Samples per pixel of the path-traced references (cached under the scene's .cache/),
+    /// 1 to 1,048,576. Default: the sidecar's `[eval] spp`, else 256.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_SPP)))]
+    pub spp: Option<u32>,
     /// Raise a configuration's reference spp until the floor (the FLIP of a second reference
     /// against the first) is below this, so that a FLIP target can be read: FLIP noise falls
     /// about as 1/sqrt(spp), so each try renders both references at the spp that rule predicts
@@ -129,10 +129,11 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         Predictor::Cpu(direct) => format!("the CPU reference inference ({} direct light)", direct.name()),
     };
     let cache = args.cache.clone().unwrap_or_else(|| default_cache_dir(&scene));
+    let spp = args.spp.or(scene.eval.spp).unwrap_or(DEFAULT_SPP);
     let settings = RenderSettings {
         width,
         height,
-        spp: args.spp,
+        spp,
         trace: TraceSettings { max_depth: MAX_DEPTH, rr_depth: Some(RR_DEPTH) },
         seed: args.seed,
         footprint: args.footprint.into(),
@@ -141,7 +142,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         "{} configurations of {} at {width}x{height}; references at {} spp, cached in {}",
         configs.len(),
         scene.name,
-        args.spp,
+        spp,
         cache.display()
     );
 
@@ -234,7 +235,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
         predictions,
         width,
         height,
-        spp: args.spp,
+        spp,
         max_depth: MAX_DEPTH,
         rr_depth: RR_DEPTH,
         seed: args.seed,
@@ -262,7 +263,9 @@ pub fn run(args: &EvalArgs) -> Result<()> {
 
 /// The most tries of `--floor-below` after the first references, and the most spp.
 const MAX_FLOOR_TRIES: u32 = 3;
-const MAX_SPP: u32 = 1 << 20;
+const MAX_SPP: u32 = EvalDefaults::MAX_SPP;
+/// The references' spp where neither the command line nor the sidecar names one.
+const DEFAULT_SPP: u32 = 256;
 
 fn parse_floor(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {

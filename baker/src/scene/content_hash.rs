@@ -1,9 +1,9 @@
 //! The scene's content hash, which a model records so that it is used only with the scene it
 //! was baked from. It covers what shapes the training samples: the objects (names and
 //! geometry), materials and their textures, the point lights, the moving light and its box,
-//! the camera box and the bake presets. It leaves out the views, so adding a named view or
-//! moving the glTF camera does not call for a re-bake; nor does anything glTF carries that
-//! rrf does not read.
+//! the camera box and the bake presets. It leaves out the views and the eval defaults, so
+//! adding a named view, moving the glTF camera or raising the references' spp does not call
+//! for a re-bake; nor does anything glTF carries that rrf does not read.
 
 use glam::Vec3;
 

@@ -300,6 +300,7 @@ pub(super) fn import(
         moving_light,
         camera_box: sidecar.camera.as_ref().map(|c| Aabb { min: c.min.into(), max: c.max.into() }),
         bake: sidecar.bake,
+        eval: sidecar.eval,
         warnings: importer.warnings,
         content_hash: 0,
     };

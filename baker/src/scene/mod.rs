@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3, Vec4};
 
 pub use error::SceneError;
-pub use sidecar::{Aabb, BakeOverrides, BakePresets, PointLightUnits, Sidecar, Units, ViewSpec};
+pub use sidecar::{Aabb, BakeOverrides, BakePresets, EvalDefaults, PointLightUnits, Sidecar, Units, ViewSpec};
 
 /// Candela per W/sr: the luminous efficacy of 555 nm light, which rrf applies to every channel
 /// of a glTF point light's intensity.
@@ -61,6 +61,8 @@ pub struct Scene {
     /// Where the camera may be during the walkthrough; `None` without a sidecar `[camera]`.
     pub camera_box: Option<Aabb>,
     pub bake: BakePresets,
+    /// The sidecar's defaults for `rrf eval`.
+    pub eval: EvalDefaults,
     /// Things that were skipped or approximated while importing, for the user to see.
     pub warnings: Vec<String>,
     /// FNV-1a 64 over what shapes the training samples (not the views): a model file records

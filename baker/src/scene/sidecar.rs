@@ -20,6 +20,9 @@
 //! [bake.final]               # overrides of a bake preset (test, preview, final)
 //! configurations = 400
 //!
+//! [eval]                     # defaults of `rrf eval` for this scene
+//! spp = 2048                 # samples per pixel of its references
+//!
 //! [units]
 //! point_lights = "W/sr"      # point-light intensity in W/sr instead of glTF's candela
 //! ```
@@ -43,7 +46,24 @@ pub struct Sidecar {
     #[serde(default)]
     pub bake: BakePresets,
     #[serde(default)]
+    pub eval: EvalDefaults,
+    #[serde(default)]
     pub units: Units,
+}
+
+/// What `rrf eval` uses for this scene where its command line says nothing.
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EvalDefaults {
+    /// Samples per pixel of the references, 1 to [`EvalDefaults::MAX_SPP`]: enough that two
+    /// references disagree by well under the FLIP that is to be judged (`rrf eval` prints
+    /// that floor), which depends on the scene.
+    pub spp: Option<u32>,
+}
+
+impl EvalDefaults {
+    /// The most samples per pixel a reference may take.
+    pub const MAX_SPP: u32 = 1 << 20;
 }
 
 /// How to read the glTF's numbers where exporters differ.
@@ -210,6 +230,13 @@ impl Sidecar {
                     ));
                 }
             }
+        }
+        if self.eval.spp.is_some_and(|spp| !(1..=EvalDefaults::MAX_SPP).contains(&spp)) {
+            return Err(SceneError::new(
+                file,
+                "eval.spp",
+                format!("{} is outside the accepted range 1 to {}", self.eval.spp.unwrap_or(0), EvalDefaults::MAX_SPP),
+            ));
         }
         Ok(())
     }
