@@ -90,8 +90,8 @@ target = [0.2, 0.1, 0.4]
 fov_y = 60.0
 
 # Two 256-spp references differ by 0.038 FLIP here, three quarters of the 0.05 target; at 2048 spp
-# the floor is under a third of it, so `rrf eval` reads the target (BENCHMARKS.md). The first
-# eval path-traces for about an hour on two cores; later ones read the cached references.
+# by 0.0185 (BENCHMARKS.md), so the target can be read. The first eval path-traces for about an
+# hour on two cores; later ones read the cached references.
 [eval]
 spp = 2048
 "#
