@@ -140,6 +140,7 @@ fn scene(meshes: Vec<(Mesh, Material)>, point_lights: Vec<PointLight>) -> Scene 
         moving_light: None,
         camera_box: None,
         bake: BakePresets::default(),
+        eval: Default::default(),
         warnings: vec![],
         content_hash: 0,
     }
