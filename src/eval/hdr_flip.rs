@@ -16,27 +16,24 @@
 //! implementation (the `flip-evaluator` package).
 
 use rrf_baker::glam::Vec3;
+use rrf_renderer::tonemap::{aces_fitted, linear_to_srgb};
 
-/// FLIP's fit of the ACES filmic curve, with its 0.6 pre-exposure folded into the
-/// coefficients: `t(x) = x (A x + B) / (x (C x + D) + E)`.
-const A: f32 = 0.6 * 0.6 * 2.51;
-const B: f32 = 0.6 * 0.03;
-const C: f32 = 0.6 * 0.6 * 2.43;
-const D: f32 = 0.6 * 0.59;
-const E: f32 = 0.14;
+/// FLIP's tonemapper is the renderer's ACES fit after an exposure of 0.6.
+const PRE_EXPOSURE: f32 = 0.6;
 
 /// The tonemapped value that the start and stop exposures give the brightest and the median
 /// luminance.
 const TARGET: f32 = 0.85;
 
 fn aces(x: f32) -> f32 {
-    (x * (A * x + B) / (x * (C * x + D) + E)).clamp(0.0, 1.0)
+    aces_fitted(PRE_EXPOSURE * x)
 }
 
-/// The input that [`aces`] maps to `t`: the positive root of `(A − tC) x² + (B − tD) x − tE`.
+/// The input that [`aces`] maps to `t`. With `aces_fitted(y) = y (2.51 y + 0.03) / (y (2.43 y
+/// + 0.59) + 0.14)`, `y` is the positive root of `(2.51 − 2.43t) y² + (0.03 − 0.59t) y − 0.14t`.
 fn aces_inverse(t: f32) -> f32 {
-    let (a, b, c) = (A - t * C, B - t * D, -t * E);
-    (-b + (b * b - 4.0 * a * c).sqrt()) / (2.0 * a)
+    let (a, b, c) = (2.51 - 2.43 * t, 0.03 - 0.59 * t, -0.14 * t);
+    (-b + (b * b - 4.0 * a * c).sqrt()) / (2.0 * a) / PRE_EXPOSURE
 }
 
 fn luminance(p: Vec3) -> f32 {
@@ -76,11 +73,8 @@ impl Exposures {
 /// `pixels` scaled by 2^`exposure`, tonemapped and clamped, as 8-bit sRGB.
 fn exposed_srgb8(pixels: &[Vec3], exposure: f32) -> Vec<u8> {
     let scale = exposure.exp2();
-    let encode = |linear: f32| {
-        let srgb = if linear <= 0.003_130_8 { 12.92 * linear } else { 1.055 * linear.powf(1.0 / 2.4) - 0.055 };
-        (srgb * 255.0 + 0.5) as u8
-    };
-    pixels.iter().flat_map(|p| (*p * scale).to_array().map(|c| encode(aces(c.max(0.0))))).collect()
+    let encode = |c: f32| (linear_to_srgb(aces(c.max(0.0) * scale)) * 255.0 + 0.5) as u8;
+    pixels.iter().flat_map(|p| p.to_array().map(encode)).collect()
 }
 
 /// The mean HDR-FLIP error of `test` against `reference` (linear RGB, rows top to bottom).
