@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use rrf_baker::bake::{BakeSettings, Quality};
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::{AlphaMode, LightKind, Scene, SceneError, UvTransform};
 use serde_json::{json, Value};
@@ -643,6 +644,20 @@ fn sidecar_bake_overrides_out_of_range() {
     let dir = cornell_with_sidecar("zero-paths", "[bake.test]\npaths_per_sample = 0\n");
     let message = load_err(&dir);
     assert!(message.contains("bake.test.paths_per_sample"), "{message}");
+}
+
+#[test]
+fn sidecar_tree_overrides() {
+    let text = "[bake.final]\nsplit_depth = 3\nmax_samples_per_network = 20000\n";
+    let scene = Scene::load(&cornell_with_sidecar("tree-overrides", text)).unwrap();
+    let settings = BakeSettings::new(Quality::Final, 1, &scene);
+    assert_eq!((settings.split_depth, settings.max_samples_per_network), (3, 20_000));
+    let without = Scene::load(&cornell_with_sidecar("no-tree-overrides", "")).unwrap();
+    let deeper = Scene::load(&cornell_with_sidecar("deeper", "[bake.final]\nsplit_depth = 4\n")).unwrap();
+    let hashes = [scene.content_hash, without.content_hash, deeper.content_hash];
+    assert!(hashes[0] != hashes[1] && hashes[0] != hashes[2] && hashes[1] != hashes[2], "{hashes:x?}");
+    let message = load_err(&cornell_with_sidecar("too-deep", "[bake.final]\nsplit_depth = 9\n"));
+    assert!(message.contains("bake.final.split_depth") && message.contains("0 to 8"), "{message}");
 }
 
 #[test]

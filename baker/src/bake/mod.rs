@@ -163,6 +163,8 @@ impl BakeSettings {
             paths_per_sample,
             max_depth,
             max_iterations,
+            split_depth,
+            max_samples_per_network,
         }) = overrides
         {
             s.configurations = configurations.unwrap_or(s.configurations);
@@ -170,6 +172,8 @@ impl BakeSettings {
             s.paths_per_sample = paths_per_sample.unwrap_or(s.paths_per_sample);
             s.max_depth = max_depth.unwrap_or(s.max_depth);
             s.max_iterations = max_iterations.unwrap_or(s.max_iterations);
+            s.split_depth = split_depth.unwrap_or(s.split_depth);
+            s.max_samples_per_network = max_samples_per_network.map_or(s.max_samples_per_network, |n| n as usize);
         }
         s
     }

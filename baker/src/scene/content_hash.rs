@@ -112,8 +112,17 @@ pub(super) fn content_hash(scene: &Scene) -> u64 {
         w.vec3s([&camera.min, &camera.max]);
     }
     for preset in [&scene.bake.test, &scene.bake.preview, &scene.bake.final_] {
-        let values = preset.as_ref().map_or([None; 5], |p| p.values());
-        values.iter().for_each(|v| w.u64(v.map_or(u64::MAX, u64::from)));
+        let values = preset.as_ref().map_or([None; 7], |p| p.values());
+        // The settings added later (split_depth on) are hashed only when set, so that a
+        // sidecar without them keeps its hash, and its shipped model stays current.
+        let (first, later) = values.split_at(5);
+        first.iter().for_each(|v| w.u64(v.map_or(u64::MAX, u64::from)));
+        for (i, v) in later.iter().enumerate() {
+            if let Some(v) = v {
+                w.u64(i as u64);
+                w.u64(u64::from(*v));
+            }
+        }
     }
     w.0 .0
 }

@@ -136,6 +136,10 @@ pub struct BakeOverrides {
     pub max_depth: Option<u32>,
     /// Levenberg–Marquardt iterations per network at most.
     pub max_iterations: Option<u32>,
+    /// The deepest an object's kd-tree may grow (0: one network per object and component).
+    pub split_depth: Option<u32>,
+    /// The most samples one network trains on (a random subset of its leaf's).
+    pub max_samples_per_network: Option<u32>,
 }
 
 /// An axis-aligned box in world space.
@@ -148,16 +152,26 @@ pub struct Aabb {
 impl BakeOverrides {
     /// The accepted range of each setting: at least 1, and at most what a bake can hold
     /// (the samples of a bake are about configurations × rays × 80 bytes).
-    pub const RANGES: [(&'static str, u32, u32); 5] = [
+    pub const RANGES: [(&'static str, u32, u32); 7] = [
         ("configurations", 1, 65_536),
         ("rays_per_configuration", 1, 1_000_000),
         ("paths_per_sample", 1, 65_536),
         ("max_depth", 1, 64),
         ("max_iterations", 1, 100_000),
+        ("split_depth", 0, 8),
+        ("max_samples_per_network", 1, 1_000_000),
     ];
 
-    pub(super) fn values(&self) -> [Option<u32>; 5] {
-        [self.configurations, self.rays_per_configuration, self.paths_per_sample, self.max_depth, self.max_iterations]
+    pub(super) fn values(&self) -> [Option<u32>; 7] {
+        [
+            self.configurations,
+            self.rays_per_configuration,
+            self.paths_per_sample,
+            self.max_depth,
+            self.max_iterations,
+            self.split_depth,
+            self.max_samples_per_network,
+        ]
     }
 }
 
