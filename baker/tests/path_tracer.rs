@@ -143,6 +143,7 @@ fn scene(meshes: Vec<(Mesh, Material)>, point_lights: Vec<PointLight>) -> Scene 
         eval: Default::default(),
         warnings: vec![],
         content_hash: 0,
+        light_transport_hash: 0,
     }
 }
 

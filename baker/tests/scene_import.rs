@@ -656,6 +656,8 @@ fn sidecar_tree_overrides() {
     let deeper = Scene::load(&cornell_with_sidecar("deeper", "[bake.final]\nsplit_depth = 4\n")).unwrap();
     let hashes = [scene.content_hash, without.content_hash, deeper.content_hash];
     assert!(hashes[0] != hashes[1] && hashes[0] != hashes[2] && hashes[1] != hashes[2], "{hashes:x?}");
+    // Bake settings do not change what a path-traced image shows: eval's references stay cached.
+    assert_eq!(scene.light_transport_hash, without.light_transport_hash);
     let message = load_err(&cornell_with_sidecar("too-deep", "[bake.final]\nsplit_depth = 9\n"));
     assert!(message.contains("bake.final.split_depth") && message.contains("0 to 8"), "{message}");
 }

@@ -1,5 +1,7 @@
-//! Path-traced references by component, cached on disk under a key of the scene's content,
-//! the configuration and the render settings, so that a second eval only renders what changed.
+//! Path-traced references by component, cached on disk under a key of the scene's light
+//! transport (its content without the bake settings), the configuration and the render
+//! settings, so that a second eval only renders what changed, and a re-bake with other
+//! settings renders nothing.
 //!
 //! A file holds a header (magic, width, height) and per pixel nine little-endian f32s:
 //! emitted, direct and indirect RGB.
@@ -26,7 +28,7 @@ pub fn default_cache_dir(scene: &Scene) -> PathBuf {
 fn key(scene: &Scene, config: &EvalConfig, s: &RenderSettings) -> u64 {
     let mut h = Fnv64::default();
     h.write(MAGIC);
-    h.write(&scene.content_hash.to_le_bytes());
+    h.write(&scene.light_transport_hash.to_le_bytes());
     let v = &config.view;
     for x in [v.eye, v.target, v.up, config.light].iter().flat_map(|p| p.to_array()).chain([v.fov_y]) {
         h.write(&x.to_le_bytes());

@@ -4,6 +4,10 @@
 //! the camera box and the bake presets. It leaves out the views and the eval defaults, so
 //! adding a named view, moving the glTF camera or raising the references' spp does not call
 //! for a re-bake; nor does anything glTF carries that rrf does not read.
+//!
+//! The same hash before the bake presets is the scene's light-transport hash: what a
+//! path-traced image of a given view and light position depends on, so that eval's cached
+//! references outlive a change of bake settings.
 
 use glam::Vec3;
 
@@ -33,7 +37,8 @@ impl Writer {
     }
 }
 
-pub(super) fn content_hash(scene: &Scene) -> u64 {
+/// The scene's (content hash, light-transport hash).
+pub(super) fn content_hashes(scene: &Scene) -> (u64, u64) {
     let mut w = Writer(Fnv64::default());
     w.u64(scene.objects.len() as u64);
     for o in &scene.objects {
@@ -111,6 +116,7 @@ pub(super) fn content_hash(scene: &Scene) -> u64 {
     if let Some(camera) = &scene.camera_box {
         w.vec3s([&camera.min, &camera.max]);
     }
+    let light_transport = w.0 .0;
     for preset in [&scene.bake.test, &scene.bake.preview, &scene.bake.final_] {
         let values = preset.as_ref().map_or([None; 7], |p| p.values());
         // The settings added later (split_depth on) are hashed only when set, so that a
@@ -124,5 +130,5 @@ pub(super) fn content_hash(scene: &Scene) -> u64 {
             }
         }
     }
-    w.0 .0
+    (w.0 .0, light_transport)
 }

@@ -12,7 +12,7 @@ use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::buffer::Data as BufferData;
 use gltf::mesh::Mode;
 
-use super::content_hash::content_hash;
+use super::content_hash::content_hashes;
 use super::error::{element_name, SceneError};
 use super::external;
 use super::sidecar::{Aabb, Sidecar};
@@ -303,8 +303,9 @@ pub(super) fn import(
         eval: sidecar.eval,
         warnings: importer.warnings,
         content_hash: 0,
+        light_transport_hash: 0,
     };
-    scene.content_hash = content_hash(&scene);
+    (scene.content_hash, scene.light_transport_hash) = content_hashes(&scene);
     Ok(scene)
 }
 

@@ -68,6 +68,9 @@ pub struct Scene {
     /// FNV-1a 64 over what shapes the training samples (not the views): a model file records
     /// it so that a model cannot be used with another scene. See `content_hash.rs`.
     pub content_hash: u64,
+    /// The content hash without the bake presets: what a path-traced image of a view and a
+    /// light position depends on (eval's reference cache key). See `content_hash.rs`.
+    pub light_transport_hash: u64,
 }
 
 #[derive(Clone, Debug)]
