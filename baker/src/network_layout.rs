@@ -6,6 +6,8 @@
 /// Network inputs: position, direction to the viewer, light position, normal (3 each) and
 /// roughness.
 pub const INPUTS: usize = 13;
+/// Where the direction to the viewer's x, y, z sit among the inputs.
+pub const VIEW_INPUT: usize = 3;
 /// Where the light position's x, y, z sit among the inputs. The renderer sums the networks
 /// over several lights by re-evaluating only these three inputs' share of the first layer.
 pub const LIGHT_INPUT: usize = 6;

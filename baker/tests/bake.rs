@@ -311,3 +311,39 @@ fn split_depth_bounds_the_kd_tree() {
         assert_eq!(model.networks.len() > jobs.len(), depth > 0, "depth {depth}");
     }
 }
+
+/// A pure Lambert surface reflects the same light towards every viewer, so its networks get
+/// the direction to the viewer as the constant 0 (an empty input range); one with a specular
+/// lobe sees it.
+#[test]
+fn lambert_networks_do_not_see_the_viewpoint() {
+    let mut scene = scene("cornell-box");
+    let tall = scene.object_by_name("TallBlock").unwrap().id as usize;
+    let mut glossy = scene.materials[scene.objects[tall].parts[0].material as usize].clone();
+    glossy.specular = 1.0;
+    scene.materials.push(glossy);
+    let glossy = scene.materials.len() as u32 - 1;
+    scene.objects[tall].parts.iter_mut().for_each(|p| p.material = glossy);
+    let mut settings = BakeSettings::new(Quality::Test, 1, &scene);
+    settings.split_depth = 0;
+    let (model, _) = bake(&scene, &settings, &scratch("lambert"), &Quiet).unwrap();
+
+    let view = 3..6;
+    let towards = |n: &rrf_baker::network::Network, to_viewer: [f32; 3]| {
+        let mut raw = [0.3f32; 13];
+        raw[view.clone()].copy_from_slice(&to_viewer);
+        n.evaluate(&raw)
+    };
+    let (a, b) = ([0.0, 0.0, -1.0], [0.6, 0.64, -0.48]);
+    for n in &model.networks {
+        let (lo, hi) = (&n.input_min[view.clone()], &n.input_max[view.clone()]);
+        if n.object == "TallBlock" {
+            assert_eq!((lo, hi), (&[-1.0; 3][..], &[1.0; 3][..]), "{} {:?}", n.object, n.component);
+            assert_ne!(towards(n, a), towards(n, b), "{} {:?}", n.object, n.component);
+        } else {
+            assert_eq!((lo, hi), (&[0.0; 3][..], &[0.0; 3][..]), "{} {:?}", n.object, n.component);
+            assert_eq!(towards(n, a), towards(n, b), "{} {:?}", n.object, n.component);
+        }
+    }
+    assert!(model.networks.iter().any(|n| n.object == "TallBlock"));
+}

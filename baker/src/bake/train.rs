@@ -10,7 +10,7 @@ use super::samples::Sample;
 use super::BakeSettings;
 use crate::hash::Fnv64;
 use crate::model::NetworkInfo;
-use crate::network::{normalize, Component, Network, INPUTS, OUTPUTS, W3};
+use crate::network::{normalize, Component, Network, INPUTS, OUTPUTS, VIEW_INPUT, W3};
 use crate::partition::Region;
 use crate::scene::{Aabb, Scene};
 use crate::trace::sampling::{mix64, Rng};
@@ -94,8 +94,19 @@ fn object_box(scene: &Scene, object: u32) -> Aabb {
 /// Input ranges for `object`'s networks, every leaf's the same: its bounding box for positions,
 /// the light's box for the light, [-1, 1] for directions, [0, 1] for roughness. Shared by the
 /// leaves so that a half starts from its parent's network as it is.
+///
+/// On an object whose every material is pure Lambert the light leaving a point is the same
+/// towards every viewer, so the direction to the viewer gets the empty range [0, 0], which
+/// [`normalize`] maps to 0 here and the renderer alike: its networks cannot learn a
+/// dependence on the viewpoint that is only noise, and then get it wrong for viewpoints far
+/// from those of training.
 fn input_ranges(scene: &Scene, object: u32) -> ([f32; INPUTS], [f32; INPUTS]) {
     let (mut lo, mut hi) = ([-1.0f32; INPUTS], [1.0f32; INPUTS]);
+    let o = &scene.objects[object as usize];
+    if o.parts.iter().all(|p| scene.materials[p.material as usize].is_lambert()) {
+        lo[VIEW_INPUT..VIEW_INPUT + 3].fill(0.0);
+        hi[VIEW_INPUT..VIEW_INPUT + 3].fill(0.0);
+    }
     let Aabb { min, max } = object_box(scene, object);
     let light = scene.moving_light.as_ref().map(|l| l.bounds);
     for a in 0..3 {

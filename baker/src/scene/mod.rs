@@ -173,6 +173,13 @@ impl Material {
         self.is_emissive() && self.emissive_texture.is_none()
     }
 
+    /// Whether every point of the material is pure Lambert diffuse (`KHR_materials_specular`
+    /// factor 0, metallic factor 0: a metallic texture only scales the factor), so that the light
+    /// it reflects is the same in every direction.
+    pub fn is_lambert(&self) -> bool {
+        self.specular == 0.0 && self.metallic == 0.0
+    }
+
     /// Its base colour, metallic-roughness, normal and emissive textures, in that order (the
     /// G-buffer's).
     pub fn textures(&self) -> [Option<TextureRef>; 4] {

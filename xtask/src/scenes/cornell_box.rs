@@ -73,11 +73,16 @@ max = [0.41, 0.5478, 0.44]
 min = [0.06, 0.06, -0.9]
 max = [0.50, 0.50, 0.05]
 
-# Rays from the camera box find only 153,000 learnable points here (most leave through the open
-# front), so 4x the preset's paths per sample costs under 2 minutes and lowers the targets' noise
-# (held-out gi FLIP 0.064 at 256 paths, 0.059 at 1024: BENCHMARKS.md).
+# Rays from the camera box find few learnable points here (most leave through the open front):
+# 8,000 rays per configuration (twice the preset) find 306,000, enough for the floor behind the
+# blocks and the blocks' shadow edges, trained to depth 3 with up to 100 iterations; 1,024 paths
+# per sample (4x the preset) keep the targets' noise low. Held-out gi FLIP 0.053 -> 0.04x against
+# 2048-spp references, and a final bake of about 14 minutes here (BENCHMARKS.md, stop 26).
 [bake.final]
 paths_per_sample = 1024
+rays_per_configuration = 8000
+split_depth = 3
+max_iterations = 100
 
 [views.front]
 eye = [0.278, 0.273, -0.8]
