@@ -328,9 +328,10 @@ fn lambert_networks_do_not_see_the_viewpoint() {
     settings.split_depth = 0;
     let (model, _) = bake(&scene, &settings, &scratch("lambert"), &Quiet).unwrap();
 
-    let view = 3..6;
-    let towards = |n: &rrf_baker::network::Network, to_viewer: [f32; 3]| {
-        let mut raw = [0.3f32; 13];
+    use rrf_baker::network::{Network, INPUTS, VIEW_INPUT};
+    let view = VIEW_INPUT..VIEW_INPUT + 3;
+    let towards = |n: &Network, to_viewer: [f32; 3]| {
+        let mut raw = [0.3f32; INPUTS];
         raw[view.clone()].copy_from_slice(&to_viewer);
         n.evaluate(&raw)
     };

@@ -175,7 +175,8 @@ impl Material {
 
     /// Whether every point of the material is pure Lambert diffuse (`KHR_materials_specular`
     /// factor 0, metallic factor 0: a metallic texture only scales the factor), so that the light
-    /// it reflects is the same in every direction.
+    /// it reflects is the same in every direction: every `Bsdf` made from it is then Lambert too
+    /// (`Bsdf::is_lambert`, the same test on one shading point's values).
     pub fn is_lambert(&self) -> bool {
         self.specular == 0.0 && self.metallic == 0.0
     }
