@@ -1,8 +1,8 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
 // Network pass, weights in a storage buffer: per pixel, the 13 inputs from the G-buffer and
-// the constants, then the direct and indirect networks of the pixel's unit (network_units.glsl),
-// summed over the lights.
+// the constants, then the direct and indirect networks of the pixel's units (network_units.glsl),
+// summed over the lights and weighted by the units' blend weights.
 //
 // Per unit, UNIT_STRIDE floats: the direct parameters, then the indirect parameters, each with
 // the input normalisation and the output scale folded in.
@@ -40,17 +40,24 @@ void main() {
     vec3 emission = object > 0u ? surface_emission(id, shading) : vec3(0.0);
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
-    if (object > 0u) {
+    uvec2 range = object > 0u ? object_units(object - 1u) : uvec2(0u);
+    if (range.y > 0u) {
         float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
-        int unit = find_unit(object - 1u, vec3(x[0], x[1], x[2]));
-        if (unit >= 0) {
-            uint base = uint(unit) * UNIT_STRIDE;
+        vec3 p = vec3(x[0], x[1], x[2]);
+        for (uint unit = range.x; unit < range.x + range.y; ++unit) {
+            float weight = unit_weight(constants.objects, unit, p);
+            if (weight == 0.0) {
+                continue;
+            }
+            uint base = unit * UNIT_STRIDE;
+            vec3 unit_direct = vec3(0.0);
+            vec3 unit_indirect = vec3(0.0);
             if (!SEVERAL_LIGHTS) {
                 for (int i = 0; i < 3; ++i) {
                     x[LIGHT_INPUT + i] = lights[0].position[i];
                 }
-                direct = forward(base, x) * lights[0].scale.rgb;
-                indirect = forward(base + PARAMETERS, x) * lights[0].scale.rgb;
+                unit_direct = forward(base, x) * lights[0].scale.rgb;
+                unit_indirect = forward(base + PARAMETERS, x) * lights[0].scale.rgb;
             } else {
                 float direct_sums[HIDDEN1];
                 float indirect_sums[HIDDEN1];
@@ -58,14 +65,16 @@ void main() {
                 forward_surface(base + PARAMETERS, x, indirect_sums);
                 for (uint l = 0u; l < constants.light_count; ++l) {
                     vec3 light = lights[l].position.xyz;
-                    direct += forward_lit(base, direct_sums, light) * lights[l].scale.rgb;
-                    indirect += forward_lit(base + PARAMETERS, indirect_sums, light) * lights[l].scale.rgb;
+                    unit_direct += forward_lit(base, direct_sums, light) * lights[l].scale.rgb;
+                    unit_indirect += forward_lit(base + PARAMETERS, indirect_sums, light) * lights[l].scale.rgb;
                 }
             }
-            vec3 reflectance = surface_reflectance(id, shading);
-            direct *= reflectance;
-            indirect *= reflectance;
+            direct += unit_direct * weight;
+            indirect += unit_indirect * weight;
         }
+        vec3 reflectance = surface_reflectance(id, shading);
+        direct *= reflectance;
+        indirect *= reflectance;
     }
     imageStore(out_direct, pixel, vec4(direct, 1.0));
     imageStore(out_indirect, pixel, vec4(indirect, 1.0));

@@ -14,7 +14,7 @@ use rrf_baker::network::{Component, Network};
 use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
 use rrf_renderer::network_pass::{
-    DirectLight, NetworkConstants, NetworkPass, NetworkShaders, NetworkUnit, NetworkWeights, Variant,
+    DirectLight, LeafBlend, NetworkConstants, NetworkPass, NetworkShaders, NetworkUnit, NetworkWeights, Variant,
 };
 use rrf_renderer::overlay::{OverlayPass, TextGrid};
 use rrf_renderer::resources::read_back_passes;
@@ -28,32 +28,37 @@ use crate::gpu_scene::{
 };
 use crate::shaders;
 
-/// The network units of the scene's objects: per object, where one of its direct networks'
-/// regions meets one of its indirect networks' (one unit for an object that was not split).
-/// Objects without networks get none. With analytic direct light only the indirect networks
-/// are needed, and they stand in for the direct ones (the pass never evaluates them).
+/// The network units of the scene's objects: per object, every pair of one of its direct
+/// networks and one of its indirect networks whose blend supports meet (one unit for an object
+/// that was not split). Objects without networks get none. With analytic direct light only
+/// the indirect networks are needed: each is a unit, with itself as a stand-in for the direct
+/// network (the pass never evaluates it) over the whole object.
 pub fn network_units<'a>(scene: &Scene, model: &'a Model, direct: Direct) -> Vec<NetworkUnit<'a>> {
     let weights = |n: &'a Network| NetworkWeights {
         params: &n.params,
         input_min: n.input_min,
         input_max: n.input_max,
         output_scale: n.output_scale,
+        blend: LeafBlend { min: n.blend.min, max: n.blend.max, min_band: n.blend.min_band, max_band: n.blend.max_band },
     };
     let mut units = Vec::new();
     for (id, o) in scene.objects.iter().enumerate() {
         let indirect = model.networks(&o.name, Component::Indirect);
-        let direct = match direct {
-            Direct::Learned => model.networks(&o.name, Component::Direct),
-            Direct::Analytic => indirect.clone(),
-        };
-        for d in &direct {
+        if direct == Direct::Analytic {
+            let unit = |i: &&'a Network| NetworkUnit {
+                object: id,
+                direct: NetworkWeights { blend: LeafBlend::WHOLE, ..weights(i) },
+                indirect: weights(i),
+            };
+            units.extend(indirect.iter().map(unit));
+            continue;
+        }
+        for d in model.networks(&o.name, Component::Direct) {
             for i in &indirect {
-                let (d_min, d_max) = d.region.bounds();
-                let (i_min, i_max) = i.region.bounds();
-                let min = std::array::from_fn(|a| d_min[a].max(i_min[a]));
-                let max = std::array::from_fn(|a| d_max[a].min(i_max[a]));
-                if (0..3).all(|a| min[a] < max[a]) {
-                    units.push(NetworkUnit { object: id, min, max, direct: weights(d), indirect: weights(i) });
+                let (d_min, d_max) = d.blend.support();
+                let (i_min, i_max) = i.blend.support();
+                if (0..3).all(|a| d_min[a].max(i_min[a]) < d_max[a].min(i_max[a])) {
+                    units.push(NetworkUnit { object: id, direct: weights(d), indirect: weights(i) });
                 }
             }
         }

@@ -1,7 +1,7 @@
-//! The renderer's network units: for every object, the boxes where a leaf of its direct
-//! kd-tree meets a leaf of its indirect one. Every point must lie in exactly one unit of each
-//! object, and that unit must carry the two leaves whose regions hold the point, the ones the
-//! CPU inference picks (`predict_image`).
+//! The renderer's network units: for every object, the pairs of a leaf of its direct kd-tree
+//! and a leaf of its indirect one whose blend supports meet, each weighing the product of its
+//! leaves' weights. At every point an object's unit weights must sum to one, and the units
+//! that carry a leaf must together weigh what the CPU inference weighs it (`predict_image`).
 
 use std::path::Path;
 
@@ -9,11 +9,13 @@ use rrf::gpu_frame::{network_units, Direct};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::network::Component;
+use rrf_baker::partition::BlendBox;
 use rrf_baker::scene::Scene;
 use rrf_baker::trace::sampling::Rng;
+use rrf_renderer::network_pass::LeafBlend;
 
 #[test]
-fn units_partition_each_object_into_pairs_of_leaves() {
+fn units_weigh_each_objects_leaves_as_the_cpu_does() {
     for name in ["cornell-box", "many-objects"] {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
         let scene = Scene::load(&dir).unwrap();
@@ -25,21 +27,42 @@ fn units_partition_each_object_into_pairs_of_leaves() {
         for _ in 0..2000 {
             let p = bounds.min + (bounds.max - bounds.min) * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
             for (id, object) in scene.objects.iter().enumerate() {
-                let holding: Vec<_> = units
+                let weighed: Vec<_> = units
                     .iter()
-                    .filter(|u| u.object == id && (0..3).all(|a| u.min[a] <= p[a] && p[a] < u.max[a]))
+                    .filter(|u| u.object == id)
+                    .map(|u| (weight(&u.direct.blend, p) * weight(&u.indirect.blend, p), u))
+                    .filter(|&(w, _)| w > 0.0)
                     .collect();
-                let leaf =
-                    |component| model.networks(&object.name, component).into_iter().find(|n| n.region.contains(p));
-                match (leaf(Component::Direct), leaf(Component::Indirect)) {
-                    (Some(direct), Some(indirect)) => {
-                        assert_eq!(holding.len(), 1, "{name} {} at {p}", object.name);
-                        assert!(holding[0].direct.params == direct.params.as_slice(), "{name} {}", object.name);
-                        assert!(holding[0].indirect.params == indirect.params.as_slice(), "{name} {}", object.name);
+                if !model.has(&object.name, Component::Direct) {
+                    assert!(weighed.is_empty(), "{name} {}: no networks, no unit", object.name);
+                    continue;
+                }
+                let total: f32 = weighed.iter().map(|(w, _)| w).sum();
+                assert!((total - 1.0).abs() < 1e-5, "{name} {} at {p}: units weigh {total}", object.name);
+                for component in [Component::Direct, Component::Indirect] {
+                    for leaf in model.networks(&object.name, component) {
+                        let carried: f32 = weighed
+                            .iter()
+                            .filter(|(_, u)| {
+                                let n = if component == Component::Direct { u.direct } else { u.indirect };
+                                n.params == leaf.params.as_slice()
+                            })
+                            .map(|(w, _)| w)
+                            .sum();
+                        let expected = leaf.blend.weight(p);
+                        assert!(
+                            (carried - expected).abs() < 1e-5,
+                            "{name} {} at {p}: {carried} for {expected}",
+                            object.name
+                        );
                     }
-                    _ => assert!(holding.is_empty(), "{name} {}: no networks, no unit", object.name),
                 }
             }
         }
     }
+}
+
+/// A unit leaf's weight at `p`, by the baker's formula.
+fn weight(b: &LeafBlend, p: Vec3) -> f32 {
+    BlendBox { min: b.min, max: b.max, min_band: b.min_band, max_band: b.max_band }.weight(p)
 }

@@ -64,6 +64,7 @@ fn main() {
                     .map(|s| std::array::from_fn(|i| normalize(s.inputs[i], data.input_min[i], data.input_max[i])))
                     .collect(),
                 targets: clean.iter().map(|s| s.target(component).map(|v| v / data.output_scale)).collect(),
+                gains: Vec::new(),
             };
             errors.push(test.mse(&result.params) * f64::from(data.output_scale).powi(2));
         }

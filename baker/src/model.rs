@@ -14,6 +14,7 @@
 use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
+use glam::Vec3;
 use safetensors::tensor::{Dtype, TensorView};
 use safetensors::SafeTensors;
 use serde::{Deserialize, Serialize};
@@ -21,7 +22,7 @@ use serde::{Deserialize, Serialize};
 use crate::atomic_file::write_atomically;
 use crate::hash::Fnv64;
 use crate::network::{Component, Network, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
-use crate::partition::{is_partition, Region, Split};
+use crate::partition::{is_partition, Region, Split, MAX_BLEND_BAND};
 use crate::scene::Scene;
 
 /// Version 4: an object's component may have several networks, one per leaf of a kd-tree over
@@ -73,8 +74,18 @@ pub struct Metadata {
     pub untrained: Vec<Untrained>,
     /// The settings the model was baked with.
     pub bake: serde_json::Value,
+    /// The half-width of the band around each kd-tree cut across which the leaves that meet
+    /// there are blended, as a share of a leaf's extent along the cut
+    /// ([`crate::partition::BlendBox`]); 0 (and absent, in models baked before blending):
+    /// hard cuts.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub blend_band: f32,
     /// FNV-1a 64 of all tensor data in the order of `networks`, in hex.
     pub checksum: String,
+}
+
+fn is_zero(v: &f32) -> bool {
+    *v == 0.0
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -99,16 +110,20 @@ pub struct NetworkInfo {
 }
 
 impl NetworkInfo {
-    /// The network this describes, with parameters `params`; `None` unless there are 13 input
-    /// ranges of each kind and the parameters of one network.
-    pub fn network(&self, params: Vec<f32>) -> Option<Network> {
+    /// The network this describes, with parameters `params`, blended across its cuts over
+    /// `blend_band` ([`Metadata::blend_band`]); `None` unless there are 13 input ranges of
+    /// each kind and the parameters of one network.
+    pub fn network(&self, params: Vec<f32>, blend_band: f32) -> Option<Network> {
         if self.input_min.len() != INPUTS || self.input_max.len() != INPUTS || params.len() != PARAMETERS {
             return None;
         }
+        // The position inputs' ranges are the object's bounding box, the kd-tree's root.
+        let corner = |v: &[f32]| Vec3::new(v[0], v[1], v[2]);
         Some(Network {
             object: self.object.clone(),
             component: self.component,
             region: self.region.clone(),
+            blend: self.region.blend_box(corner(&self.input_min), corner(&self.input_max), blend_band),
             input_min: std::array::from_fn(|i| self.input_min[i]),
             input_max: std::array::from_fn(|i| self.input_max[i]),
             output_scale: self.output_scale,
@@ -247,6 +262,9 @@ impl Model {
                 metadata.inputs.len()
             ));
         }
+        if !(0.0..=MAX_BLEND_BAND).contains(&metadata.blend_band) {
+            return Err(format!("blend_band {} is outside [0, {MAX_BLEND_BAND}]", metadata.blend_band));
+        }
         let mut hash = Fnv64::default();
         let mut networks = Vec::new();
         for info in &metadata.networks {
@@ -271,7 +289,9 @@ impl Model {
                 }
             }
             let name = format!("network {prefix}");
-            let network = info.network(params).ok_or_else(|| format!("{name}: input ranges must have 13 entries"))?;
+            let network = info
+                .network(params, metadata.blend_band)
+                .ok_or_else(|| format!("{name}: input ranges must have 13 entries"))?;
             if info.target_transform != "scale" || !(info.output_scale.is_finite() && info.output_scale > 0.0) {
                 return Err(format!("{name}: unknown target transform"));
             }

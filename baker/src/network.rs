@@ -5,7 +5,7 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::partition::Region;
+use crate::partition::{BlendBox, Region};
 
 #[path = "network_layout.rs"]
 mod layout;
@@ -69,6 +69,8 @@ pub struct Network {
     pub component: Component,
     /// Where on the object the network applies: a leaf of the object's kd-tree, or all of it.
     pub region: Region,
+    /// Its weight among its tree's leaves: the region, blended across its cuts.
+    pub blend: BlendBox,
     /// Input `i` maps `[input_min[i], input_max[i]]` to `[-1, 1]`.
     pub input_min: [f32; INPUTS],
     pub input_max: [f32; INPUTS],
@@ -97,6 +99,18 @@ impl Network {
         let y = forward(&self.params, &x);
         Vec3::from(y) * self.output_scale
     }
+}
+
+/// An object's component at raw inputs: the sum of its kd-tree's `leaves`, each weighted by
+/// its blend weight at the input position (one leaf away from the cuts).
+pub fn evaluate_blended(leaves: &[&Network], raw: &[f32; INPUTS]) -> Vec3 {
+    let position = Vec3::new(raw[0], raw[1], raw[2]);
+    leaves
+        .iter()
+        .map(|n| (n.blend.weight(position), n))
+        .filter(|&(w, _)| w > 0.0)
+        .map(|(w, n)| n.evaluate(raw) * w)
+        .sum()
 }
 
 /// The float types the network runs in: f32 for inference, f64 for training.

@@ -37,8 +37,10 @@ pub const MIN_REFLECTANCE: f32 = 0.01;
 /// the renderer's storage variant: the direct, then the indirect parameters, each with its input
 /// normalisation and output scale folded in.
 pub const UNIT_STRIDE: usize = 2 * PARAMETERS;
-/// Floats per unit box in the renderer's unit table (min xyz, then max xyz).
-pub const UNIT_BOX: usize = 6;
+/// Floats per unit in the renderer's unit table: for its direct, then its indirect network,
+/// the blend box of its kd-tree leaf (`partition::BlendBox`): min xyz, max xyz, the bands
+/// around the min faces, then around the max faces.
+pub const UNIT_BLEND: usize = 24;
 /// Specialization constant id of the first direct parameter of the renderer's specialized
 /// variant; the indirect network's follow the direct's. Ids below it are the shader's own.
 pub const FIRST_PARAMETER_ID: usize = 16;

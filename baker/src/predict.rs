@@ -5,7 +5,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use crate::model::Model;
-use crate::network::{raw_inputs, reflectance, Component, Network};
+use crate::network::{evaluate_blended, raw_inputs, reflectance, Component, Network};
 use crate::scene::PlacedLight;
 use crate::trace::integrator::point_lights_at;
 use crate::trace::sampling::Frame;
@@ -24,11 +24,6 @@ impl<'a> ObjectNetworks<'a> {
             |component| world.scene.objects.iter().map(|o| model.networks(&o.name, component)).collect::<Vec<_>>();
         ObjectNetworks { direct: lookup(Component::Direct), indirect: lookup(Component::Indirect) }
     }
-}
-
-/// The network among `networks` (an object's leaves) whose region holds `position`.
-fn leaf_at<'a>(networks: &[&'a Network], position: Vec3) -> Option<&'a Network> {
-    networks.iter().find(|n| n.region.contains(position)).copied()
 }
 
 /// Where predicted direct light comes from.
@@ -64,9 +59,9 @@ pub fn predict_image(
             let object = si.object as usize;
             let r = reflectance(si.bsdf.base_color, si.bsdf.metallic, si.bsdf.specular);
             let eval = |networks: &[&Network]| {
-                let Some(n) = leaf_at(networks, si.position) else { return Vec3::ZERO };
                 let lit = |l: &PlacedLight| {
-                    n.evaluate(&raw_inputs(si.position, -dir, l.position, si.shading_normal, si.roughness)) * l.scale
+                    let raw = raw_inputs(si.position, -dir, l.position, si.shading_normal, si.roughness);
+                    evaluate_blended(networks, &raw) * l.scale
                 };
                 world.lights.iter().map(lit).sum::<Vec3>() * r
             };

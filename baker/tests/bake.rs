@@ -348,3 +348,49 @@ fn lambert_networks_do_not_see_the_viewpoint() {
     }
     assert!(model.networks.iter().any(|n| n.object == "TallBlock"));
 }
+
+/// Where the kd-tree cuts an object, its two leaves disagree (each learned its own half), but
+/// the blend of the two is continuous: across the cut, over a millionth of the object,
+/// the prediction steps by a tiny share of the leaves' disagreement (the blend band's
+/// slope allows 3e-5), where a hard cut would step by all of it. The points lie where the cut
+/// plane crosses the object's vertices' edges (on the blocks' side faces), lit from the
+/// middle of the light's box.
+#[test]
+fn blended_leaves_do_not_step_across_their_cut() {
+    use rrf_baker::glam::Vec3;
+    use rrf_baker::network::{evaluate_blended, raw_inputs};
+    let scene = scene("cornell-box");
+    let settings = BakeSettings::new(Quality::Test, 1, &scene);
+    assert!(settings.blend_band > 0.0);
+    let (model, _) = bake(&scene, &settings, &scratch("blend"), &Quiet).unwrap();
+    let light = scene.moving_light.as_ref().unwrap().bounds;
+    let light = (light.min + light.max) * 0.5;
+    let (mut cuts, mut worst) = (0, 0.0f32);
+    for object in &scene.objects {
+        for component in Component::ALL {
+            let leaves = model.networks(&object.name, component);
+            if leaves.len() != 2 {
+                continue;
+            }
+            let cut = leaves[0].region.0[0];
+            let axis = cut.axis as usize;
+            let delta = 1e-6 * (leaves[0].input_max[axis] - leaves[0].input_min[axis]);
+            for (v, n) in object.positions.iter().zip(&object.normals) {
+                let at = |offset: f32| {
+                    let mut p = *v;
+                    p[axis] = cut.at + offset;
+                    raw_inputs(p, Vec3::new(0.0, 0.0, -1.0), light, *n, 0.5)
+                };
+                let disagreement = (leaves[0].evaluate(&at(0.0)) - leaves[1].evaluate(&at(0.0))).abs().max_element();
+                if disagreement < 0.02 * leaves[0].output_scale {
+                    continue;
+                }
+                let step = evaluate_blended(&leaves, &at(delta)) - evaluate_blended(&leaves, &at(-delta));
+                worst = worst.max(step.abs().max_element() / disagreement);
+                cuts += 1;
+            }
+        }
+    }
+    assert!(cuts > 0, "no leaves disagree at their cut: nothing to blend");
+    assert!(worst < 0.005, "across a cut the blend steps by {worst} of the leaves' disagreement");
+}

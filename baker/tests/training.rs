@@ -47,7 +47,7 @@ fn dataset(n: usize, seed: u64) -> Dataset {
     let mut rng = Rng::new(seed, 2);
     let inputs: Vec<[f32; INPUTS]> = (0..n).map(|_| std::array::from_fn(|_| 2.0 * rng.next_f32() - 1.0)).collect();
     let targets = inputs.iter().map(target).collect();
-    Dataset { inputs, targets }
+    Dataset { inputs, targets, gains: Vec::new() }
 }
 
 #[test]

@@ -37,7 +37,7 @@ use crate::sync::{Access, Pass, ResourceStates, Use};
 mod layout {
     include!("../../baker/src/network_layout.rs");
 }
-use layout::{B1, FIRST_PARAMETER_ID, HIDDEN1, UNIT_BOX, W3};
+use layout::{B1, FIRST_PARAMETER_ID, HIDDEN1, UNIT_BLEND, W3};
 pub use layout::{INPUTS, PARAMETERS, UNIT_STRIDE};
 /// The most units `network_classify.comp` tells apart.
 const MAX_UNITS: usize = 1024;
@@ -81,6 +81,36 @@ pub struct NetworkWeights<'a> {
     pub input_min: [f32; INPUTS],
     pub input_max: [f32; INPUTS],
     pub output_scale: f32,
+    /// Where on its object the network applies, and how it blends with its neighbours.
+    pub blend: LeafBlend,
+}
+
+/// A kd-tree leaf's weight over space (the baker's `partition::BlendBox` as plain data): 1
+/// in its half-open box `min <= p < max` away from its faces, 0 outside the box grown by the
+/// bands, and a smoothstep across the band of half-width `min_band` or `max_band` around each
+/// face (0: a hard cut). `±f32::MAX` and no band where a side is unbounded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LeafBlend {
+    pub min: [f32; 3],
+    pub max: [f32; 3],
+    pub min_band: [f32; 3],
+    pub max_band: [f32; 3],
+}
+
+impl LeafBlend {
+    /// A network that covers all of its object.
+    pub const WHOLE: LeafBlend =
+        LeafBlend { min: [-f32::MAX; 3], max: [f32::MAX; 3], min_band: [0.0; 3], max_band: [0.0; 3] };
+
+    /// Whether the leaf blends with a neighbour somewhere.
+    fn has_band(&self) -> bool {
+        self.min_band.iter().chain(&self.max_band).any(|&b| b > 0.0)
+    }
+
+    /// The leaf's entry in the unit table (`network_units.glsl`).
+    fn table(&self) -> impl Iterator<Item = f32> + '_ {
+        self.min.iter().chain(&self.max).chain(&self.min_band).chain(&self.max_band).copied()
+    }
 }
 
 impl NetworkWeights<'_> {
@@ -90,17 +120,22 @@ impl NetworkWeights<'_> {
     }
 }
 
-/// A part of an object with one direct and one indirect network: object id `object`'s surface
-/// in the half-open box `min <= p < max` (`±f32::MAX` where unbounded). The units of an
-/// object must partition space (the boxes of a kd-tree's leaves, or of two trees' leaves
-/// where they meet), so that each of its pixels is in exactly one.
+/// A part of object id `object` with one direct and one indirect network, whose weight at a
+/// point is the product of the two networks' [`LeafBlend`] weights there. The weights of an
+/// object's units must sum to one everywhere (every pair of a direct and an indirect leaf of
+/// two kd-trees whose supports meet), so that a pixel's radiance is their weighted sum.
 #[derive(Clone, Copy)]
 pub struct NetworkUnit<'a> {
     pub object: usize,
-    pub min: [f32; 3],
-    pub max: [f32; 3],
     pub direct: NetworkWeights<'a>,
     pub indirect: NetworkWeights<'a>,
+}
+
+impl NetworkUnit<'_> {
+    /// Whether the unit blends with another somewhere.
+    fn blends(&self) -> bool {
+        self.direct.blend.has_band() || self.indirect.blend.has_band()
+    }
 }
 
 impl NetworkUnit<'_> {
@@ -125,7 +160,7 @@ fn ordered<'a>(objects: usize, units: &[NetworkUnit<'a>]) -> Result<Vec<NetworkU
 }
 
 /// The table of `network_units.glsl` for `units` (grouped by object) of `objects` object ids:
-/// per object its first unit and unit count, then per unit its box.
+/// per object its first unit and unit count, then per unit its two leaves' blend boxes.
 fn unit_table(objects: usize, units: &[NetworkUnit]) -> Vec<f32> {
     let mut table = vec![0.0f32; 2 * objects.max(1)];
     for (index, unit) in units.iter().enumerate() {
@@ -136,9 +171,9 @@ fn unit_table(objects: usize, units: &[NetworkUnit]) -> Vec<f32> {
         entry[1] += 1.0;
     }
     for unit in units {
-        table.extend(unit.min.iter().chain(&unit.max));
+        table.extend(unit.direct.blend.table().chain(unit.indirect.blend.table()));
     }
-    debug_assert_eq!(table.len(), 2 * objects.max(1) + UNIT_BOX * units.len());
+    debug_assert_eq!(table.len(), 2 * objects.max(1) + UNIT_BLEND * units.len());
     table
 }
 
@@ -179,18 +214,26 @@ fn fold(params: &[f32], input_min: &[f32; INPUTS], input_max: &[f32; INPUTS], ou
     out
 }
 
-/// Specialization constants of unit `index`'s two pipelines, for frames of one light and of
-/// several (see `network_specialized_main.glsl`).
-fn specializations(index: usize, unit: &NetworkUnit, tiled: bool, analytic: bool) -> [Specialization; 2] {
+/// Specialization constants of the two pipelines of unit `index` of `units` (grouped by
+/// object, of `objects` object ids), for frames of one light and of several (see
+/// `network_specialized_main.glsl`).
+fn specializations(
+    objects: usize,
+    units: &[NetworkUnit],
+    index: usize,
+    tiled: bool,
+    analytic: bool,
+) -> [Specialization; 2] {
+    let unit = &units[index];
     let mut words = vec![0u32; FIRST_PARAMETER_ID + 2 * PARAMETERS];
     words[0] = unit.object as u32 + 1;
     words[1] = u32::from(tiled);
     words[2] = u32::from(analytic);
     words[4] = index as u32;
-    // BOX_MIN_X … BOX_MAX_Z.
-    for (word, value) in words[5..11].iter_mut().zip(unit.min.iter().chain(&unit.max)) {
-        *word = value.to_bits();
-    }
+    // OBJECT_FIRST_UNIT, OBJECT_UNITS, OBJECTS.
+    words[5] = units.iter().position(|u| u.object == unit.object).expect("the unit itself") as u32;
+    words[6] = units.iter().filter(|u| u.object == unit.object).count() as u32;
+    words[7] = objects.max(1) as u32;
     let (direct, indirect) = (unit.direct.folded(), unit.indirect.folded());
     for (word, value) in words[FIRST_PARAMETER_ID..].iter_mut().zip(direct.iter().chain(&indirect)) {
         *word = value.to_bits();
@@ -428,6 +471,13 @@ struct Specialized {
     tiles: Buffer,
     tile_capacity: u32,
     direct: Direct,
+    /// Whether units blend: each unit's dispatch then adds to what the ones before it wrote,
+    /// as a pass of its own, after a barrier.
+    blended: bool,
+    /// A display pass's sum of the blending units' radiance at a pixel, until the last
+    /// tonemaps it: the image's size when units blend, 1×1 otherwise; `None` for a pass that
+    /// writes radiance images.
+    blend_sum: Option<Image>,
 }
 
 impl NetworkPass {
@@ -498,6 +548,7 @@ impl NetworkPass {
                 gbuffer,
                 shared,
                 written,
+                objects,
                 &units,
                 variant == Variant::Tiled,
                 direct,
@@ -534,6 +585,9 @@ impl NetworkPass {
                 Direct::Learned { stand_in } => states.set_layout(stand_in, vk::ImageLayout::GENERAL),
                 Direct::Analytic { shadow, .. } => shadow.register(states),
             }
+            if let Some(sum) = &s.blend_sum {
+                states.set_layout(sum, vk::ImageLayout::GENERAL);
+            }
         }
     }
 
@@ -549,10 +603,19 @@ impl NetworkPass {
             None => None,
         };
         let outputs = ctx.guard(outputs);
-        let tiles = match &self.kind {
-            Kind::Specialized(s) => Some(tile_buffer(ctx, s.unit_count as usize, extent)?),
-            Kind::Storage { .. } => None,
+        let (tiles, capacity) = match &self.kind {
+            Kind::Specialized(s) => {
+                let (tiles, capacity) = tile_buffer(ctx, s.unit_count as usize, extent)?;
+                (Some(tiles), capacity)
+            }
+            Kind::Storage { .. } => (None, 0),
         };
+        let tiles = ctx.guard(tiles);
+        let blend_sum = match &self.kind {
+            Kind::Specialized(s) if s.blend_sum.is_some() => Some(blend_sum_image(ctx, s.blended, extent)?),
+            _ => None,
+        };
+        let (tiles, blend_sum) = (tiles.keep().map(|t| (t, capacity)), blend_sum);
         std::mem::replace(&mut self.outputs, outputs.keep()).destroy(ctx);
         self.extent = extent;
         let written = Written::of(&self.outputs, display)?;
@@ -565,10 +628,12 @@ impl NetworkPass {
                     ctx.destroy_buffer(std::mem::replace(&mut s.tiles, tiles));
                     s.tile_capacity = capacity;
                 }
+                if let Some(sum) = blend_sum {
+                    std::mem::replace(&mut s.blend_sum, Some(sum)).destroy(ctx);
+                }
                 let bindings = classify_bindings(gbuffer, shared, &s.dispatch, &s.tiles, written);
                 s.classify.rebind(ctx, &bindings);
-                let shadow = Bind::StorageImage(s.direct.shadow_maps());
-                s.networks.rebind(ctx, &network_bindings(gbuffer, shared, &s.tiles, written, shadow));
+                s.networks.rebind(ctx, &s.bindings(gbuffer, shared, written));
             }
         }
         Ok(())
@@ -653,14 +718,15 @@ impl NetworkPass {
                     s.classify.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
                 });
                 let mut uses: Vec<Use> = g.iter().map(|i| read(i)).collect();
-                uses.extend([materials, lights, Use::buffer(&s.tiles, Access::COMPUTE_READ)]);
+                uses.extend([materials, lights, units, Use::buffer(&s.tiles, Access::COMPUTE_READ)]);
                 uses.push(read(s.direct.shadow_maps()));
                 if s.tiled {
                     uses.push(Use::buffer(&s.dispatch, Access::INDIRECT_READ));
                 }
-                uses.extend(writes);
-                let networks =
-                    Pass::new("network (specialization constants)", uses, move |cmd| s.record(ctx, cmd, extent, &c));
+                // Blending units read what the units before them wrote.
+                let written = if s.blended { Access::COMPUTE_READ_WRITE } else { Access::COMPUTE_WRITE };
+                uses.extend(writes.iter().map(|w| Use { access: written, ..*w }));
+                uses.extend(s.blend_sum.iter().map(|sum| Use::image(sum, Access::COMPUTE_READ_WRITE)));
                 if !s.dispatch_reset.is_empty() {
                     passes.push(reset);
                 }
@@ -668,7 +734,19 @@ impl NetworkPass {
                     let positions = c.lights().iter().map(|l| [l.position[0], l.position[1], l.position[2]]).collect();
                     passes.push(shadow.pass(ctx, mesh, positions));
                 }
-                passes.extend([classify, networks]);
+                passes.push(classify);
+                let push = s.push(&c);
+                if s.blended {
+                    for unit in 0..s.unit_count as usize {
+                        passes.push(Pass::new("network unit (blended)", uses.clone(), move |cmd| {
+                            s.record_unit(ctx, cmd, extent, &c, &push, unit)
+                        }));
+                    }
+                } else {
+                    passes.push(Pass::new("network (specialization constants)", uses, move |cmd| {
+                        (0..s.unit_count as usize).for_each(|unit| s.record_unit(ctx, cmd, extent, &c, &push, unit))
+                    }));
+                }
             }
         }
         Ok(passes)
@@ -700,6 +778,7 @@ impl Destroy for Specialized {
         self.classify.destroy(ctx);
         self.networks.destroy(ctx);
         self.direct.destroy(ctx);
+        self.blend_sum.destroy(ctx);
         for buffer in [self.dispatch, self.tiles] {
             ctx.destroy_buffer(buffer);
         }
@@ -815,6 +894,7 @@ fn specialized(
     gbuffer: &GBufferTargets,
     shared: Shared,
     written: Written,
+    objects: usize,
     units: &[NetworkUnit],
     tiled: bool,
     direct: DirectLight,
@@ -831,7 +911,8 @@ fn specialized(
     }
     let analytic = matches!(direct, DirectLight::Analytic { .. });
     let specializations: Vec<Specialization> =
-        units.iter().enumerate().flat_map(|(index, unit)| specializations(index, unit, tiled, analytic)).collect();
+        (0..units.len()).flat_map(|index| specializations(objects, units, index, tiled, analytic)).collect();
+    let blended = units.iter().any(NetworkUnit::blends);
     let dispatch_reset: Vec<u32> = units.iter().flat_map(|_| [0, 1, 1]).collect();
 
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -865,11 +946,17 @@ fn specialized(
             Direct::Analytic { light, shadow: ShadowPass::new(ctx, shadow_vertex, shadow_fragment)? }
         }
     });
+    let blend_sum = match written {
+        Written::Display(_) => Some(blend_sum_image(ctx, blended, gbuffer.extent)?),
+        Written::Radiance(_) => None,
+    };
+    let blend_sum = ctx.guard(blend_sum);
+    let bindings = specialized_bindings(gbuffer, shared, &tiles, written, &direct, blend_sum.as_ref());
     let networks = ComputePass::specialized(
         ctx,
         "network (specialization constants)",
         specialized_spirv,
-        &network_bindings(gbuffer, shared, &tiles, written, Bind::StorageImage(direct.shadow_maps())),
+        &bindings,
         std::mem::size_of::<SpecializedPush>() as u32,
         (TILE, TILE),
         &specializations,
@@ -884,7 +971,35 @@ fn specialized(
         tiles: tiles.keep(),
         tile_capacity,
         direct: direct.keep(),
+        blended,
+        blend_sum: blend_sum.keep(),
     })
+}
+
+/// The bindings of `network_specialized_main.glsl`: [`network_bindings`] with the shadow maps
+/// last, then for a display pass the blend sum, then the unit table.
+fn specialized_bindings<'a>(
+    gbuffer: &'a GBufferTargets,
+    shared: Shared<'a>,
+    tiles: &'a Buffer,
+    written: Written<'a>,
+    direct: &'a Direct,
+    blend_sum: Option<&'a Image>,
+) -> Vec<Bind<'a>> {
+    let mut binds = network_bindings(gbuffer, shared, tiles, written, Bind::StorageImage(direct.shadow_maps()));
+    binds.extend(blend_sum.map(Bind::StorageImage));
+    binds.push(Bind::StorageBuffer(shared.units));
+    binds
+}
+
+/// A display pass's blend sum: an RGBA32F image of `extent` when units blend, else a 1×1
+/// stand-in that no pixel reaches; in `GENERAL` layout.
+fn blend_sum_image(ctx: &Context, blended: bool, extent: vk::Extent2D) -> Result<Image> {
+    let extent = if blended { extent } else { vk::Extent2D { width: 1, height: 1 } };
+    let usage = vk::ImageUsageFlags::STORAGE;
+    let image = ctx.guard(ctx.create_image("network blend sum", extent, vk::Format::R32G32B32A32_SFLOAT, usage)?);
+    ctx.submit_once(|cmd| ctx.transition(cmd, &image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL))?;
+    Ok(image.keep())
 }
 
 /// `words` as bytes, with at least one word: Vulkan buffers cannot be empty.
@@ -894,14 +1009,19 @@ fn pad(words: &[u32]) -> &[u8] {
 }
 
 impl Specialized {
-    /// The per-unit dispatches. Each writes only its own unit's pixels of the outputs.
-    fn record(&self, ctx: &Context, cmd: vk::CommandBuffer, extent: vk::Extent2D, c: &NetworkConstants) {
+    /// The networks' bindings at the current size.
+    fn bindings<'a>(&'a self, gbuffer: &'a GBufferTargets, shared: Shared<'a>, written: Written<'a>) -> Vec<Bind<'a>> {
+        specialized_bindings(gbuffer, shared, &self.tiles, written, &self.direct, self.blend_sum.as_ref())
+    }
+
+    /// The networks' push constants for a frame with constants `c`.
+    fn push(&self, c: &NetworkConstants) -> SpecializedPush {
         let (intensity, spot) = match &self.direct {
             Direct::Analytic { light, .. } => (light.intensity, light.spot),
             Direct::Learned { .. } => ([0.0; 3], None),
         };
         let spot = spot.unwrap_or(Spot { axis: [0.0; 3], cos_inner: 1.0, cos_outer: 0.0 });
-        let push = SpecializedPush {
+        SpecializedPush {
             eye: c.eye,
             light_count: c.light_count,
             tile_capacity: self.tile_capacity,
@@ -911,15 +1031,26 @@ impl Specialized {
             spot_axis: [spot.axis[0], spot.axis[1], spot.axis[2], spot.cos_inner],
             spot_cos_outer: spot.cos_outer,
             pad: [0; 3],
-        };
-        let several = usize::from(c.light_count > 1);
-        for index in 0..self.unit_count as usize {
-            let dispatch = if self.tiled {
-                Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * index as u64 }
-            } else {
-                Dispatch::Covering { width: extent.width, height: extent.height }
-            };
-            self.networks.record_pipeline(ctx, cmd, 2 * index + several, bytemuck::bytes_of(&push), dispatch);
         }
+    }
+
+    /// Unit `index`'s dispatch: over its tiles (tiled) or the whole image. Without blending it
+    /// writes only its own unit's pixels; with blending, it adds to the units before it.
+    fn record_unit(
+        &self,
+        ctx: &Context,
+        cmd: vk::CommandBuffer,
+        extent: vk::Extent2D,
+        c: &NetworkConstants,
+        push: &SpecializedPush,
+        index: usize,
+    ) {
+        let several = usize::from(c.light_count > 1);
+        let dispatch = if self.tiled {
+            Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * index as u64 }
+        } else {
+            Dispatch::Covering { width: extent.width, height: extent.height }
+        };
+        self.networks.record_pipeline(ctx, cmd, 2 * index + several, bytemuck::bytes_of(push), dispatch);
     }
 }

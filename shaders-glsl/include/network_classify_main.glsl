@@ -3,8 +3,8 @@
 // Network pass, step 1 of the specialized variants: sorts the image's 8×8 tiles by network
 // unit (network_units.glsl).
 //
-// Each workgroup is one tile. It appends the tile to the list of every unit that covers one
-// of its pixels, counting in that unit's indirect dispatch arguments, so that each unit's
+// Each workgroup is one tile. It appends the tile to the list of every unit whose weight is
+// not 0 at one of its pixels (one per pixel, or several where leaves blend), counting in that unit's indirect dispatch arguments, so that each unit's
 // pipeline then runs only over its own tiles. Pixels that no network covers (background,
 // objects without networks) get their final values here: the three radiance images
 // (network_classify.comp), or with DISPLAY defined (network_classify_display.comp) the one
@@ -61,12 +61,14 @@ void main() {
     if (all(lessThan(pixel, imageSize(gbuffer_id)))) {
         uint packed = imageLoad(gbuffer_id, pixel).r;
         uint id = id_object(packed);
-        int unit = -1;
-        if (id > 0u) {
-            unit = find_unit(id - 1u, uintBitsToFloat(imageLoad(gbuffer_surface, pixel).xyz));
-        }
-        if (unit >= 0) {
-            atomicOr(seen[uint(unit) / 32u], 1u << (uint(unit) % 32u));
+        uvec2 range = id > 0u ? object_units(id - 1u) : uvec2(0u);
+        if (range.y > 0u) {
+            vec3 p = uintBitsToFloat(imageLoad(gbuffer_surface, pixel).xyz);
+            for (uint unit = range.x; unit < range.x + range.y; ++unit) {
+                if (unit_weight(constants.objects, unit, p) > 0.0) {
+                    atomicOr(seen[unit / 32u], 1u << (unit % 32u));
+                }
+            }
         } else {
             vec3 emission = vec3(0.0);
             if (id > 0u) {

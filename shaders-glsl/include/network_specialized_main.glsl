@@ -12,6 +12,11 @@
 //
 // ANALYTIC: direct light is computed (analytic_direct.glsl), not learned; the direct network
 // is compiled out.
+//
+// Where the unit's weight is below one (network_units.glsl: a band where kd-tree leaves
+// blend), the units that meet there add their weighted radiance in the order they are
+// dispatched, with a barrier between dispatches: the first stores, the others load and add,
+// and in DISPLAY mode the sum is kept in `blend_sum` until the last one tonemaps it.
 #ifndef RRF_NETWORK_SPECIALIZED_MAIN_GLSL
 #define RRF_NETWORK_SPECIALIZED_MAIN_GLSL
 
@@ -25,14 +30,12 @@ layout(constant_id = 2) const bool ANALYTIC = false;
 // the networks about 50% slower inside a loop, even one that runs once, and most frames have
 // one light (BENCHMARKS.md, "Several lights").
 layout(constant_id = 3) const bool SEVERAL_LIGHTS = false;
-// The unit's index (its tile list) and box, half-open, as in network_units.glsl.
+// The unit's index (its tile list and its entry in the unit table), its object's first unit
+// and unit count, and the number of object entries in the unit table (network_units.glsl).
 layout(constant_id = 4) const uint UNIT = 0u;
-layout(constant_id = 5) const float BOX_MIN_X = 0.0;
-layout(constant_id = 6) const float BOX_MIN_Y = 0.0;
-layout(constant_id = 7) const float BOX_MIN_Z = 0.0;
-layout(constant_id = 8) const float BOX_MAX_X = 0.0;
-layout(constant_id = 9) const float BOX_MAX_Y = 0.0;
-layout(constant_id = 10) const float BOX_MAX_Z = 0.0;
+layout(constant_id = 5) const uint OBJECT_FIRST_UNIT = 0u;
+layout(constant_id = 6) const uint OBJECT_UNITS = 1u;
+layout(constant_id = 7) const uint OBJECTS = 1u;
 
 // Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
 layout(binding = 5) readonly buffer Tiles { uint tiles[]; };
@@ -40,11 +43,15 @@ layout(binding = 5) readonly buffer Tiles { uint tiles[]; };
 layout(binding = 6, rgba8) uniform writeonly image2D display;
 // The point lights' cube shadow maps (ANALYTIC; a 1×1 stand-in otherwise).
 layout(binding = 7, r32f) uniform readonly image2D shadow_atlas;
+// The weighted sum so far of the units that blend at a pixel, before tonemapping.
+layout(binding = 8, rgba32f) uniform image2D blend_sum;
+#define UNITS_BINDING 9
 #else
-layout(binding = 6, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 7, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 8, rgba32f) uniform writeonly image2D out_gi;
+layout(binding = 6, rgba32f) uniform image2D out_direct;
+layout(binding = 7, rgba32f) uniform image2D out_indirect;
+layout(binding = 8, rgba32f) uniform image2D out_gi;
 layout(binding = 9, r32f) uniform readonly image2D shadow_atlas;
+#define UNITS_BINDING 10
 #endif
 
 layout(push_constant) uniform Constants {
@@ -62,11 +69,25 @@ layout(push_constant) uniform Constants {
 } constants;
 
 #include "network_inputs.glsl"
+#include "network_units.glsl"
 #include "specialized_networks.glsl"
 #include "analytic_direct.glsl"
 #ifdef DISPLAY
 #include "tonemap.glsl"
 #endif
+
+// Whether a unit of this pipeline's object dispatched before this one (`earlier`) or after
+// it has a weight at `p`.
+bool others_weigh(bool earlier, vec3 p) {
+    uint begin = earlier ? OBJECT_FIRST_UNIT : UNIT + 1u;
+    uint end = earlier ? UNIT : OBJECT_FIRST_UNIT + OBJECT_UNITS;
+    for (uint u = begin; u < end; ++u) {
+        if (unit_weight(OBJECTS, u, p) > 0.0) {
+            return true;
+        }
+    }
+    return false;
+}
 
 void main() {
     uvec2 tile = gl_WorkGroupID.xy;
@@ -85,8 +106,8 @@ void main() {
     Shading shading = pixel_shading(pixel);
     float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
     vec3 p = vec3(x[0], x[1], x[2]);
-    if (any(lessThan(p, vec3(BOX_MIN_X, BOX_MIN_Y, BOX_MIN_Z)))
-        || any(greaterThanEqual(p, vec3(BOX_MAX_X, BOX_MAX_Y, BOX_MAX_Z)))) {
+    float weight = unit_weight(OBJECTS, UNIT, p);
+    if (weight == 0.0) {
         return;
     }
     vec3 direct = vec3(0.0);
@@ -127,11 +148,32 @@ void main() {
     vec3 shown = constants.shown == 1u ? direct
                : constants.shown == 2u ? indirect
                : surface_emission(id, shading) + direct + indirect;
+    if (weight < 1.0) {
+        shown *= weight;
+        if (others_weigh(true, p)) {
+            shown += imageLoad(blend_sum, pixel).rgb;
+        }
+        if (others_weigh(false, p)) {
+            imageStore(blend_sum, pixel, vec4(shown, 1.0));
+            return;
+        }
+    }
     imageStore(display, pixel, vec4(tonemap(shown, constants.exposure_scale), 1.0));
 #else
+    vec3 gi = surface_emission(id, shading) + direct + indirect;
+    if (weight < 1.0) {
+        direct *= weight;
+        indirect *= weight;
+        gi *= weight;
+        if (others_weigh(true, p)) {
+            direct += imageLoad(out_direct, pixel).rgb;
+            indirect += imageLoad(out_indirect, pixel).rgb;
+            gi += imageLoad(out_gi, pixel).rgb;
+        }
+    }
     imageStore(out_direct, pixel, vec4(direct, 1.0));
     imageStore(out_indirect, pixel, vec4(indirect, 1.0));
-    imageStore(out_gi, pixel, vec4(surface_emission(id, shading) + direct + indirect, 1.0));
+    imageStore(out_gi, pixel, vec4(gi, 1.0));
 #endif
 }
 

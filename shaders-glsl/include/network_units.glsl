@@ -1,12 +1,15 @@
 // The network units: the parts of objects that each have one direct and one indirect network
 // (the whole object, or where a leaf of its direct kd-tree meets one of its indirect tree;
 // baker/src/partition.rs). network_pass.rs (`unit_table`) writes the table: per object (id - 1)
-// the index of its first unit and how many it has (0: no networks), then per unit its box,
-// min xyz then max xyz, half-open. An object's boxes partition space, so each of its pixels
-// is in exactly one.
+// the index of its first unit and how many it has (0: no networks), then per unit
+// UNIT_BLEND floats: the blend boxes of its direct and its indirect leaf.
 //
-// Before including: UNITS_BINDING, and a push-constant block `constants` with `objects`, the
-// number of object ids.
+// Leaves blend across their cuts: a unit's weight at a point is its direct leaf's weight
+// times its indirect leaf's, and an object's units' weights sum to one, so that the pixel's
+// radiance is the weighted sum of the units whose weight is not 0 there (one, away from the
+// cuts).
+//
+// Before including: UNITS_BINDING.
 #ifndef RRF_NETWORK_UNITS_GLSL
 #define RRF_NETWORK_UNITS_GLSL
 
@@ -14,21 +17,36 @@
 
 layout(std430, binding = UNITS_BINDING) readonly buffer Units { float units[]; };
 
-// The unit of object (id - 1) `object` that holds position `p`, or -1 if the object has no
-// networks.
-int find_unit(uint object, vec3 p) {
-    uint first = uint(units[2u * object]);
-    uint count = uint(units[2u * object + 1u]);
-    uint boxes = 2u * constants.objects;
-    for (uint u = first; u < first + count; ++u) {
-        uint b = boxes + u * UNIT_BOX;
-        vec3 lo = vec3(units[b], units[b + 1u], units[b + 2u]);
-        vec3 hi = vec3(units[b + 3u], units[b + 4u], units[b + 5u]);
-        if (all(greaterThanEqual(p, lo)) && all(lessThan(p, hi))) {
-            return int(u);
-        }
+// 0 below the band at ± band, 1 above it, a smoothstep across it; without a band, the step
+// x >= at. The twin of `rising` in baker/src/partition.rs.
+float rising(float x, float at, float band) {
+    if (band > 0.0) {
+        float t = clamp((x - (at - band)) / (2.0 * band), 0.0, 1.0);
+        return t * t * (3.0 - 2.0 * t);
     }
-    return -1;
+    return x >= at ? 1.0 : 0.0;
+}
+
+// The weight at `p` of the leaf whose blend box starts at units[b]: the twin of
+// `BlendBox::weight` in baker/src/partition.rs.
+float leaf_weight(uint b, vec3 p) {
+    float w = 1.0;
+    for (uint a = 0u; a < 3u; ++a) {
+        w *= rising(p[a], units[b + a], units[b + 6u + a])
+           * (1.0 - rising(p[a], units[b + 3u + a], units[b + 9u + a]));
+    }
+    return w;
+}
+
+// Unit `u`'s weight at `p`, in a table of `objects` object entries.
+float unit_weight(uint objects, uint u, vec3 p) {
+    uint b = 2u * objects + u * UNIT_BLEND;
+    return leaf_weight(b, p) * leaf_weight(b + UNIT_BLEND / 2u, p);
+}
+
+// The first unit of object (id - 1) `object`, and how many it has.
+uvec2 object_units(uint object) {
+    return uvec2(units[2u * object], units[2u * object + 1u]);
 }
 
 #endif

@@ -25,6 +25,10 @@ use crate::trace::sampling::Rng;
 pub struct Dataset {
     pub inputs: Vec<[f32; INPUTS]>,
     pub targets: Vec<[f32; OUTPUTS]>,
+    /// What each row's output is multiplied by before it is compared with its target (empty:
+    /// 1 for every row). A leaf of a blended kd-tree fits its weight times its output to what
+    /// the other leaves leave of the target.
+    pub gains: Vec<f32>,
 }
 
 impl Dataset {
@@ -36,16 +40,21 @@ impl Dataset {
         self.inputs.is_empty()
     }
 
+    /// Row `i`'s gain.
+    fn gain(&self, i: usize) -> f32 {
+        self.gains.get(i).copied().unwrap_or(1.0)
+    }
+
     /// Mean squared error per channel of the network `params` on this set.
     pub fn mse(&self, params: &[f32]) -> f64 {
         if self.is_empty() {
             return 0.0;
         }
         let mut sum = 0.0f64;
-        for (x, t) in self.inputs.iter().zip(&self.targets) {
+        for (i, (x, t)) in self.inputs.iter().zip(&self.targets).enumerate() {
             let y = forward(params, x);
             for c in 0..OUTPUTS {
-                let e = f64::from(y[c] - t[c]);
+                let e = f64::from(self.gain(i) * y[c] - t[c]);
                 sum += e * e;
             }
         }
@@ -114,16 +123,14 @@ fn normal_equations(train: &Dataset, params: &[f64]) -> (Mat<f64>, Mat<f64>, f64
         for (n, s) in (start..end).enumerate() {
             let x: [f64; INPUTS] = train.inputs[s].map(f64::from);
             let y = forward_with_jacobian(params, &x, &mut grads);
+            let gain = f64::from(train.gain(s));
             for c in 0..OUTPUTS {
                 let col = n * OUTPUTS + c;
-                let residual = y[c] - f64::from(train.targets[s][c]);
+                let residual = gain * y[c] - f64::from(train.targets[s][c]);
                 e[(col, 0)] = residual;
                 sse += residual * residual;
-                jt.col_mut(col)
-                    .try_as_col_major_mut()
-                    .expect("contiguous column")
-                    .as_slice_mut()
-                    .copy_from_slice(&grads[c]);
+                let column = jt.col_mut(col).try_as_col_major_mut().expect("contiguous column").as_slice_mut();
+                column.iter_mut().zip(&grads[c]).for_each(|(j, g)| *j = gain * g);
             }
         }
         let jt_chunk = jt.as_ref().subcols(0, rows);

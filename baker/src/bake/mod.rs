@@ -96,6 +96,12 @@ pub struct BakeSettings {
     /// A network is split in two while its validation error is above its targets' noise (there
     /// is error a better fit could remove) and each half would have `min_samples`.
     pub split_depth: u32,
+    /// The half-width of the band around each kd-tree cut across which the leaves that meet
+    /// there are blended, and fitted together so that their blend matches the targets, as a
+    /// share of a leaf's extent along the cut (the model records it:
+    /// [`Metadata::blend_band`]). At most the share by which a leaf's samples reach past its
+    /// cuts, so that every leaf learned the whole band.
+    pub blend_band: f32,
     /// Which networks to train. Written to the model and the cache keys only when not both,
     /// so that bakes of both keep the bytes they had before this setting existed.
     #[serde(skip_serializing_if = "Trained::is_both")]
@@ -119,6 +125,7 @@ impl BakeSettings {
                 validation_fraction: 0.2,
                 shard_configurations: 4,
                 split_depth: 1,
+                blend_band: train::OVERLAP,
                 trained: Trained::Both,
             },
             Quality::Preview => BakeSettings {
@@ -134,6 +141,7 @@ impl BakeSettings {
                 validation_fraction: 0.15,
                 shard_configurations: 8,
                 split_depth: 1,
+                blend_band: train::OVERLAP,
                 trained: Trained::Both,
             },
             Quality::Final => BakeSettings {
@@ -149,6 +157,7 @@ impl BakeSettings {
                 validation_fraction: 0.15,
                 shard_configurations: 8,
                 split_depth: 2,
+                blend_band: train::OVERLAP,
                 trained: Trained::Both,
             },
         };
@@ -514,7 +523,10 @@ pub fn bake_part(
             let checkpoint: Option<Vec<(Network, NetworkInfo)>> =
                 cache::read(&path, NETWORK_MAGIC, key.0, &corrupt, |bytes| {
                     let Checkpoint { leaves } = serde_json::from_slice(bytes).ok()?;
-                    leaves.into_iter().map(|Leaf { info, params }| Some((info.network(params)?, info))).collect()
+                    leaves
+                        .into_iter()
+                        .map(|Leaf { info, params }| Some((info.network(params, settings.blend_band)?, info)))
+                        .collect()
                 });
             let leaves = match checkpoint {
                 Some(resumed) => {
@@ -563,6 +575,7 @@ pub fn bake_part(
         networks: networks.iter().map(|(_, info)| info.clone()).collect(),
         untrained,
         bake: serde_json::to_value(settings).expect("settings serialise"),
+        blend_band: settings.blend_band,
         checksum: String::new(),
     };
     let model = Model { metadata, networks: networks.into_iter().map(|(n, _)| n).collect() };

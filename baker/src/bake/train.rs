@@ -17,8 +17,8 @@ use crate::trace::sampling::{mix64, Rng};
 
 /// Each half of a split learns from the samples in its box grown by this share of the box's
 /// size on every side, so that both networks that meet at a split plane learned the light
-/// there and the seam between them stays faint.
-const OVERLAP: f32 = 0.1;
+/// across the band where they are blended ([`BakeSettings::blend_band`]).
+pub const OVERLAP: f32 = 0.1;
 
 /// The most the two halves of a split may differ where they meet: their mean squared
 /// difference there, relative to the mean square of the parent's targets (0.03: an RMS step of
@@ -184,8 +184,75 @@ pub fn train_tree(
     let tree = Tree { scene, settings, object, component };
     let root = Node::root(scene, object);
     let trained = train_network(tree, &root, samples, None);
-    grow(tree, root, samples, trained)
+    let mut leaves = grow(tree, root, samples, trained);
+    if leaves.len() > 1 && settings.blend_band > 0.0 {
+        fit_blend(tree, samples, &mut leaves);
+    }
+    leaves
 }
+
+/// Refits the leaves of one tree so that their blend, not each leaf alone, matches the
+/// targets across the bands where they meet: leaf by leaf (Gauss–Seidel, in tree order), each
+/// leaf's weight times its output is fitted by Levenberg–Marquardt, from where it is, to what
+/// the other leaves' weighted outputs leave of the targets, on the samples where its weight is
+/// not 0. Inside its box, away from the bands, that is its own fit as before; in a band, it is
+/// the share of the light that its neighbours do not already give. Each leaf keeps the
+/// parameters with the lowest validation error of the blend, its starting ones included, and
+/// records that error.
+fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInfo)]) {
+    let Tree { settings, object, .. } = tree;
+    for i in 0..leaves.len() {
+        let own = leaves[i].0.blend;
+        let near: Vec<(&Sample, f32)> =
+            samples.iter().map(|&s| (s, own.weight(position(s)))).filter(|&(_, w)| w > 0.0).collect();
+        if near.iter().all(|&(_, w)| w == 1.0) {
+            continue; // no sample in a band: the leaf's own fit is the blend's
+        }
+        let mut order: Vec<usize> = (0..near.len()).collect();
+        let stream = Fnv64::of(leaves[i].1.region.path().as_bytes());
+        Rng::new(settings.seed ^ stream ^ BLEND_STREAM, 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
+        order.truncate(settings.max_samples_per_network);
+        let network = &leaves[i].0;
+        let rms = network.output_scale;
+        let validation_count = ((order.len() as f32 * settings.validation_fraction) as usize).max(1);
+        let (mut train, mut validation) = (Dataset::default(), Dataset::default());
+        let mut noise = 0.0f64;
+        for (n, &k) in order.iter().enumerate() {
+            let (s, weight) = near[k];
+            if n < validation_count {
+                noise += f64::from(s.noise(tree.component));
+            }
+            let p = position(s);
+            let others: Vec3 = leaves
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != i)
+                .map(|(_, (other, _))| (other.blend.weight(p), other))
+                .filter(|&(w, _)| w > 0.0)
+                .map(|(w, other)| other.evaluate(&s.inputs) * w)
+                .sum();
+            let rest = Vec3::from(s.target(tree.component)) - others;
+            let set = if n < validation_count { &mut validation } else { &mut train };
+            set.inputs
+                .push(std::array::from_fn(|k| normalize(s.inputs[k], network.input_min[k], network.input_max[k])));
+            set.targets.push((rest / rms).to_array());
+            set.gains.push(weight);
+        }
+        let lm_settings = LmSettings { max_iterations: settings.max_iterations, patience: 10 };
+        let result = lm::train(&train, &validation, network.params.clone(), &lm_settings);
+        let scale2 = f64::from(rms) * f64::from(rms);
+        let (network, info) = &mut leaves[i];
+        network.params = result.params;
+        info.samples = train.len() + validation.len();
+        info.train_mse = result.train_mse * scale2;
+        info.val_mse = result.val_mse * scale2;
+        info.val_noise = noise / validation.len().max(1) as f64;
+        info.iterations += result.iterations;
+    }
+}
+
+/// Separates the random streams of the blend fit's sample subsets from the leaves' own.
+const BLEND_STREAM: u64 = 0xb1e4_d000_0000_0001;
 
 /// What one tree learns: an object's component, in a bake of `scene` with `settings`.
 #[derive(Clone, Copy)]
@@ -296,6 +363,7 @@ fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&N
         val_noise: validation_noise * scale2,
         iterations: result.iterations,
     };
-    let network = info.network(result.params).expect("13 input ranges and one network's parameters");
+    let network =
+        info.network(result.params, settings.blend_band).expect("13 input ranges and one network's parameters");
     Trained { network, info, excess: result.val_mse - validation_noise }
 }
