@@ -94,6 +94,35 @@ fn eval_reports_metrics_figures_and_caches_references() {
     let configs = report["configs"].as_array().unwrap();
     assert!(!configs.iter().any(beats_trivial_predictions), "a zero model must fail: {report}");
 
+    // The seam figure has teeth: the same leaves with hard cuts step across them by more than
+    // their blend does, and by more than the reference (at a size with pixels enough along
+    // the cuts).
+    let mut hard = Model::load(&model, None).unwrap();
+    assert!(hard.metadata.blend_band > 0.0, "test bakes blend");
+    hard.metadata.blend_band = 0.0;
+    let hard_path = dir.join("hard.safetensors");
+    hard.save(&hard_path).unwrap();
+    let worst_seam = |model: &Path, name: &str| {
+        let report_dir = dir.join(name);
+        #[rustfmt::skip]
+        let args = [
+            "eval", "scenes/cornell-box", "--model", model.to_str().unwrap(), "--configs", "0", "--spp", "8",
+            "--size", "160x120", "--cache", cache.to_str().unwrap(), "-o", report_dir.to_str().unwrap(),
+        ];
+        let out = rrf(&args, &[("RRF_VALIDATION", "required")]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let report: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(report_dir.join("metrics.json")).unwrap()).unwrap();
+        let excess = |s: &serde_json::Value| {
+            s["predicted_step"].as_f64().unwrap().abs() - s["reference_step"].as_f64().unwrap().abs()
+        };
+        let configs = report["configs"].as_array().unwrap().iter();
+        configs.filter(|c| !c["worst_seam"].is_null()).map(|c| excess(&c["worst_seam"])).fold(f64::MIN, f64::max)
+    };
+    let (blended, hard) = (worst_seam(&model, "seams-blended"), worst_seam(&hard_path, "seams-hard"));
+    assert!(blended > f64::MIN, "a cut is in view");
+    assert!(hard > blended + 1.0 && hard > 2.0, "hard cuts step by {hard} levels, blended ones by {blended}");
+
     // Without --spp, the references take the sidecar's [eval] spp.
     let copy = dir.join("cornell-copy");
     std::fs::create_dir_all(&copy).unwrap();

@@ -21,6 +21,7 @@ use crate::eval::figure::{compose, Panel};
 use crate::eval::metrics::{compare, Baselines, Metrics};
 use crate::eval::reference_cache::{default_cache_dir, reference};
 use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, ConfigReport, Report};
+use crate::eval::seams::{pixel_hits, seams, Hit, Seam};
 use crate::gpu_frame::{rgb, Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use crate::image_out::tonemap_rgb8;
 use crate::progress::Progress;
@@ -185,8 +186,12 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             };
             let predicted = predict(&predictor, &scene, &geometry, &model, config, width, height)?;
             let figure = format!("{:02}-{}.png", i, config.name);
-            let Scores { metrics, baselines } =
-                evaluate(&predicted, &truth.pixels, (width, height), settings.spp, &args.output.join(&figure))?;
+            let hits = pixel_hits(&scene, &geometry, config, (width, height));
+            let cuts = Cuts { scene: &scene, model: &model, hits: &hits };
+            let Scores { metrics, baselines, seams } =
+                evaluate(&predicted, &truth.pixels, (width, height), settings.spp, cuts, &args.output.join(&figure))?;
+            let worst_seam = seams.iter().max_by(|a, b| a.excess().total_cmp(&b.excess())).cloned();
+            let seams_over_reference = seams.iter().filter(|s| s.excess() > 2.0 * s.reference_noise).count();
             eprintln!(
                 "{:<16} gi relMSE {:.4} PSNR {:5.2} dB FLIP {:.4} HDR-FLIP {:.4} (floor {:.4} / {:.4} at {} spp; \
                  black {:.4}, mean colour {:.4}){}",
@@ -202,6 +207,22 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                 baselines.mean_colour.flip,
                 if cached { " (cached reference)" } else { "" }
             );
+            if let Some(s) = &worst_seam {
+                eprintln!(
+                    "{:<16} worst seam {} {} {}: {:+.2} levels (reference {:+.2} ± {:.2}, {} pixel pairs); {} of {} \
+                     cuts step more than the reference",
+                    "",
+                    s.object,
+                    s.component.name(),
+                    s.cut,
+                    s.predicted_step,
+                    s.reference_step,
+                    s.reference_noise,
+                    s.pairs,
+                    seams_over_reference,
+                    seams.len()
+                );
+            }
             let v = &config.view;
             Ok(ConfigReport {
                 name: config.name.clone(),
@@ -213,6 +234,8 @@ pub fn run(args: &EvalArgs) -> Result<()> {
                 metrics,
                 baselines,
                 floor,
+                worst_seam,
+                seams_over_reference,
             })
         })
         .collect();
@@ -330,10 +353,20 @@ fn predict(
     }
 }
 
-/// What one configuration scores: per component, and trivial predictions of the global image.
+/// What one configuration scores: per component, trivial predictions of the global image, and
+/// the steps across the kd-tree's cuts.
 struct Scores {
     metrics: ComponentMetrics,
     baselines: Baselines,
+    seams: Vec<Seam>,
+}
+
+/// What the seams are measured on: the scene, the model's trees and each pixel's surface.
+#[derive(Clone, Copy)]
+struct Cuts<'a> {
+    scene: &'a Scene,
+    model: &'a Model,
+    hits: &'a [Option<Hit>],
 }
 
 /// The configuration's scores against the reference `truth`, and its figure written to
@@ -343,6 +376,7 @@ fn evaluate(
     truth: &[rrf_baker::trace::Radiance],
     (width, height): (u32, u32),
     spp: u32,
+    cuts: Cuts,
     figure: &std::path::Path,
 ) -> Result<Scores> {
     let pick = |f: fn(&rrf_baker::trace::Radiance) -> Vec3| truth.iter().map(f).collect::<Vec<Vec3>>();
@@ -352,9 +386,14 @@ fn evaluate(
     let indirect = compare(&p.indirect, &true_indirect, width, height);
     let metrics = ComponentMetrics { gi: gi.metrics, direct: direct.metrics, indirect: indirect.metrics };
 
-    let images = [&p.direct, &p.indirect, &p.gi, &true_gi].map(|pixels| tonemap_rgb8(pixels, 0.0));
+    let mut images = [&p.direct, &p.indirect, &p.gi, &true_gi, &p.gi].map(|pixels| tonemap_rgb8(pixels, 0.0));
+    let (seams, on_cut) = seams(cuts.scene, cuts.model, cuts.hits, &images[2], &images[3], (width, height));
+    // The last panel: the prediction with the pixels that straddle a cut in magenta.
+    for (rgb, _) in images[4].chunks_exact_mut(3).zip(&on_cut).filter(|(_, &cut)| cut) {
+        rgb.copy_from_slice(&[255, 0, 255]);
+    }
     let reference_label = format!("reference {spp}spp");
-    let labels = ["pred. direct", "pred. indirect", "pred. global", reference_label.as_str()];
+    let labels = ["pred. direct", "pred. indirect", "pred. global", reference_label.as_str(), "kd-tree cuts"];
     let panels: Vec<Panel> = labels.iter().zip(&images).map(|(label, rgb)| Panel { label, rgb }).collect();
     let footer: Vec<String> = [("global", metrics.gi), ("direct", metrics.direct), ("indirect", metrics.indirect)]
         .iter()
@@ -368,7 +407,7 @@ fn evaluate(
     compose(&panels, &gi.flip_map, width, height, &footer)
         .save(figure)
         .with_context(|| format!("cannot write {}", figure.display()))?;
-    Ok(Scores { metrics, baselines: Baselines::of(&true_gi, width, height) })
+    Ok(Scores { metrics, baselines: Baselines::of(&true_gi, width, height), seams })
 }
 
 #[cfg(test)]

@@ -6,3 +6,4 @@ pub mod hdr_flip;
 pub mod metrics;
 pub mod reference_cache;
 pub mod report;
+pub mod seams;

@@ -7,6 +7,7 @@ use anyhow::{Context as _, Result};
 use serde::Serialize;
 
 use super::metrics::{Baselines, Metrics};
+use super::seams::Seam;
 
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct ComponentMetrics {
@@ -52,6 +53,12 @@ pub struct ConfigReport {
     /// The global image's metrics of a second reference of the same spp with independent
     /// paths, against the first: below it, a prediction's error is the references' noise.
     pub floor: Metrics,
+    /// The kd-tree cut whose prediction steps most beyond the reference's step across the same
+    /// pixels (`eval::seams`), if any cut is in view.
+    pub worst_seam: Option<Seam>,
+    /// Cuts in view whose prediction steps more than the reference's, by over twice the
+    /// reference's standard error.
+    pub seams_over_reference: usize,
 }
 
 #[derive(Debug, Serialize)]
