@@ -120,8 +120,12 @@ pub enum FrameOutput {
 /// Where a frame's direct light comes from (`--direct`).
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Direct {
-    /// From each object's direct network: any kind of light, area lights included.
+    /// `analytic` where the scene's only light is its moving point or spot light (the RRF
+    /// paper's own mode, with sharp shadows; not with the storage variant), `learned`
+    /// otherwise (area lights, and scenes with other lights).
     #[default]
+    Auto,
+    /// From each object's direct network: any kind of light, area lights included.
     Learned,
     /// Computed per pixel from the baker's BRDF for a point or spot light, with shadows from
     /// cube shadow maps (the RRF paper's own mode; sharp shadows). Needs the tiled or
@@ -130,11 +134,22 @@ pub enum Direct {
 }
 
 impl Direct {
+    /// The mode to render `scene` in with `variant` (`None`: the CPU inference): `Auto`
+    /// picks analytic direct light where it can run, learned elsewhere; the others are
+    /// themselves.
+    pub fn resolve(self, scene: &Scene, variant: Option<Variant>) -> Direct {
+        match self {
+            Direct::Auto if variant != Some(Variant::Storage) && analytic_light(scene).is_ok() => Direct::Analytic,
+            Direct::Auto => Direct::Learned,
+            chosen => chosen,
+        }
+    }
+
     /// Whether `scene` can be lit this way: analytic direct light needs the scene's only
     /// light to be its moving point or spot light.
     pub fn check_scene(self, scene: &Scene) -> Result<()> {
         match self {
-            Direct::Learned => Ok(()),
+            Direct::Auto | Direct::Learned => Ok(()),
             Direct::Analytic => analytic_light(scene).map(|_| ()),
         }
     }
@@ -160,19 +175,19 @@ impl Direct {
         Ok(())
     }
 
-    pub fn name(self) -> &'static str {
-        match self {
-            Direct::Learned => "learned",
-            Direct::Analytic => "analytic",
+    /// The CPU inference's mode for `scene`.
+    pub fn cpu(self, scene: &Scene) -> rrf_baker::predict::Direct {
+        match self.resolve(scene, None) {
+            Direct::Analytic => rrf_baker::predict::Direct::Analytic,
+            _ => rrf_baker::predict::Direct::Learned,
         }
     }
-}
 
-impl From<Direct> for rrf_baker::predict::Direct {
-    fn from(d: Direct) -> Self {
-        match d {
-            Direct::Learned => rrf_baker::predict::Direct::Learned,
-            Direct::Analytic => rrf_baker::predict::Direct::Analytic,
+    pub fn name(self) -> &'static str {
+        match self {
+            Direct::Auto => "auto",
+            Direct::Learned => "learned",
+            Direct::Analytic => "analytic",
         }
     }
 }
@@ -215,7 +230,7 @@ pub struct GpuFrame {
 
 impl GpuFrame {
     /// Everything for frames of `scene` at `extent` with network pass `variant`, writing
-    /// `output`.
+    /// `output`, with direct light from where `direct` (resolved for the scene) says.
     pub fn new(
         ctx: &Context,
         scene: &Scene,
@@ -225,6 +240,7 @@ impl GpuFrame {
         output: FrameOutput,
         direct: Direct,
     ) -> Result<Self> {
+        let direct = direct.resolve(scene, Some(variant));
         // Each part is destroyed again if a later one cannot be made.
         let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
         let (vertices, indices) = gbuffer_mesh(scene);
@@ -243,7 +259,7 @@ impl GpuFrame {
         let display = (output == FrameOutput::Display && variant != Variant::Storage).then_some(&*ldr);
         let materials = network_materials(scene);
         let direct = match direct {
-            Direct::Learned => DirectLight::Learned,
+            Direct::Auto | Direct::Learned => DirectLight::Learned,
             Direct::Analytic => DirectLight::Analytic {
                 light: analytic_light(scene)?,
                 shadow_vertex: shaders::SHADOW_VERT,

@@ -48,8 +48,8 @@ pub struct BakeArgs {
     /// Print one line of JSON with the figures of the bake.
     #[arg(long)]
     pub json: bool,
-    /// The direct light the model is for: `learned` trains a direct and an indirect network
-    /// per object; `analytic` trains only the indirect ones (half the training), for
+    /// The direct light the model is for: `learned` (and `auto`, which may pick either at
+    /// run time) trains a direct and an indirect network per object; `analytic` trains only the indirect ones (half the training), for
     /// rendering with `--direct analytic` (a moving point or spot light only). Give the same
     /// value to every stage of a split bake.
     #[arg(long, value_enum, default_value_t = Direct::Learned)]

@@ -81,7 +81,7 @@ pub struct BenchArgs {
     /// (the walkthrough's frame), `both` times each.
     #[arg(long, value_enum, default_value_t = OutputArg::Both)]
     pub output: OutputArg,
-    #[arg(long, value_enum, default_value_t = Direct::Learned, help = super::DIRECT_HELP)]
+    #[arg(long, value_enum, default_value_t = Direct::Auto, help = super::DIRECT_HELP)]
     pub direct: Direct,
     /// Numbers of lights to time, e.g. 1,2,4: copies of the moving light spread through its
     /// box (each 1 to 16). With two or more, the cost of each extra light is printed.
@@ -160,7 +160,9 @@ impl Bench<'_> {
     ) -> Result<serde_json::Value> {
         let (ctx, scene, model, args) = (self.ctx, self.scene, self.model, self.args);
         let setup = Instant::now();
-        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, output, args.direct)?;
+        let direct = args.direct.resolve(scene, Some(variant.0));
+        direct.check(scene, model)?;
+        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, output, direct)?;
         let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
         let settings =
             FrameSettings { view: view.clone(), lights: lights.to_vec(), exposure_scale: 1.0, shown: Shown::Gi };
@@ -175,7 +177,7 @@ impl Bench<'_> {
         // Networks evaluated per frame: two per pixel of an object that has them.
         let trained: Vec<bool> = scene.objects.iter().map(|o| model.has(&o.name, Component::Direct)).collect();
         // Analytic direct light computes direct light instead of evaluating its network.
-        let per_pixel = if args.direct == Direct::Analytic { 1 } else { 2 };
+        let per_pixel = if direct == Direct::Analytic { 1 } else { 2 };
         let evaluations = per_pixel * objects.iter().filter(|&&id| id > 0 && trained[id as usize - 1]).count();
         let network_ms = median(network);
         let per_s = evaluations as f64 / (network_ms * 1e-3);
@@ -191,7 +193,7 @@ impl Bench<'_> {
             "width": width,
             "height": height,
             "lights": lights.len(),
-            "direct": format!("{:?}", args.direct).to_lowercase(),
+            "direct": direct.name(),
             "frames": args.frames,
             "setup_ms": setup_ms,
             "gbuffer_ms": median(gbuffer),

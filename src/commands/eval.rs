@@ -65,7 +65,7 @@ pub struct EvalArgs {
     /// Where to cache the references; default: .cache/references/ in the scene's folder.
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
-    #[arg(long, value_enum, default_value_t = Direct::Learned, help = super::DIRECT_HELP)]
+    #[arg(long, value_enum, default_value_t = Direct::Auto, help = super::DIRECT_HELP)]
     pub direct: Direct,
     /// Where in its pixel each reference path starts. `centre` traces the ray whose hit the
     /// G-buffer rasterises, so the scores are the networks' error alone; `area` scores against
@@ -106,17 +106,19 @@ pub fn run(args: &EvalArgs) -> Result<()> {
     let model = Model::load(&model_path, Some(&scene))?;
     let geometry = Geometry::new(&scene);
     let configs = held_out(&scene, &geometry, args.configs as usize, args.seed)?;
-    args.direct.check(&scene, &model)?;
     std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create {}", args.output.display()))?;
 
+    // The GPU predictions use the tiled variant, which does everything the CPU inference does.
+    let direct = args.direct.resolve(&scene, None);
+    direct.check(&scene, &model)?;
     let predictor = if args.cpu {
-        Predictor::Cpu(args.direct)
+        Predictor::Cpu(direct)
     } else {
-        match gpu_predictor(&scene, &model, (width, height), args.direct) {
+        match gpu_predictor(&scene, &model, (width, height), direct) {
             Ok(gpu) => Predictor::Gpu(gpu),
             Err(e) => {
                 eprintln!("warning: no Vulkan device ({e}); predicting with the CPU inference");
-                Predictor::Cpu(args.direct)
+                Predictor::Cpu(direct)
             }
         }
     };
@@ -125,7 +127,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             "{} (Vulkan, {} network pass, {} direct light)",
             gpu.0.info.name,
             Variant::Tiled.name(),
-            args.direct.name()
+            direct.name()
         ),
         Predictor::Cpu(direct) => format!("the CPU reference inference ({} direct light)", direct.name()),
     };
@@ -332,7 +334,7 @@ fn predict(
         Predictor::Cpu(direct) => {
             let world = World::new(scene, geometry, Some(config.light));
             let camera = Camera::new(&config.view, width as f32 / height as f32);
-            let image = predict_image(&world, &camera, model, (width, height), (*direct).into());
+            let image = predict_image(&world, &camera, model, (width, height), direct.cpu(scene));
             Ok(Predicted {
                 direct: image.component(|r| r.direct),
                 indirect: image.component(|r| r.indirect),

@@ -21,6 +21,7 @@ Its sidecar (light and camera boxes, views, bake settings) is the glTF's name wi
 MyScene.toml beside MyScene.glb";
 
 /// The --direct flag of the commands that render from a model.
-pub const DIRECT_HELP: &str = "Where direct light comes from: `learned` (the direct networks; any light) or \
-`analytic` (computed from the BRDF for a point or spot light, with cube shadow maps; tiled and per-object variants \
-only)";
+pub const DIRECT_HELP: &str = "Where direct light comes from: `auto` (the default: `analytic` where the scene's only \
+light is its moving point or spot light and the variant can, `learned` otherwise), `learned` (the direct networks; any \
+light) or `analytic` (computed from the BRDF for a point or spot light, with cube shadow maps; tiled and per-object \
+variants only)";

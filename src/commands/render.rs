@@ -27,7 +27,7 @@ pub struct RenderArgs {
     /// Which light to show.
     #[arg(long, value_enum, default_value_t = Component::Gi)]
     pub component: Component,
-    #[arg(long, value_enum, default_value_t = Direct::Learned, help = super::DIRECT_HELP)]
+    #[arg(long, value_enum, default_value_t = Direct::Auto, help = super::DIRECT_HELP)]
     pub direct: Direct,
     /// How the networks reach the shader (GPU only).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
@@ -48,16 +48,17 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let model = model_to_render(&scene, args.model.as_deref())?;
     let view = args.view.resolve_view(&scene)?;
     let lights = args.view.lights(&scene)?;
-    args.direct.check(&scene, &model)?;
+    let direct = args.direct.resolve(&scene, (!args.cpu).then_some(args.variant.0));
+    direct.check(&scene, &model)?;
     let start = Instant::now();
     let (pixels, how) = if args.cpu {
         let geometry = Geometry::new(&scene);
         let world = World::with_lights(&scene, &geometry, &lights);
         let camera = Camera::new(&view, width as f32 / height as f32);
-        let image = predict_image(&world, &camera, &model, (width, height), args.direct.into());
+        let image = predict_image(&world, &camera, &model, (width, height), direct.cpu(&scene));
         (image.component(|r| args.component.pick(r)), "CPU inference".to_string())
     } else {
-        let target = GpuTarget { variant: args.variant, direct: args.direct, size: (width, height) };
+        let target = GpuTarget { variant: args.variant, direct, size: (width, height) };
         gpu_render(&scene, &model, &target, &view, lights, args.component)?
     };
     let seconds = start.elapsed().as_secs_f64();

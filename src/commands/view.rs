@@ -51,7 +51,7 @@ pub struct ViewArgs {
     /// Window size (or frame size when headless) in pixels, each side 1 to 16384.
     #[arg(long, default_value = "960x540", value_name = "WxH")]
     pub size: String,
-    #[arg(long, value_enum, default_value_t = Direct::Learned, help = super::DIRECT_HELP)]
+    #[arg(long, value_enum, default_value_t = Direct::Auto, help = super::DIRECT_HELP)]
     pub direct: Direct,
     /// How the networks reach the shader (see `rrf render --help`).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
@@ -126,10 +126,11 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let model = model_to_render(&scene, args.model.as_deref())?;
     let view = named_view(&scene, args.view.as_deref())?;
     let lights = crate::lights::lights_from_args(&scene, &args.light)?;
-    args.direct.check(&scene, &model)?;
+    let direct = args.direct.resolve(&scene, Some(args.variant.0));
+    direct.check(&scene, &model)?;
     let mut state = ViewerState::new(&scene, view, lights);
     state.overlay = !args.no_overlay;
-    state.direct = args.direct;
+    state.direct = direct;
     if let Some(dir) = &args.record {
         std::fs::create_dir_all(dir).with_context(|| format!("--record: cannot create {}", dir.display()))?;
     }
@@ -171,7 +172,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let ctx = Context::new(&options).context("cannot start Vulkan (`rrf info` says more)")?;
     let extent = vk::Extent2D { width: size.0, height: size.1 };
     let started = std::time::Instant::now();
-    let mut renderer = Renderer::new(ctx, &scene, &model, (args.variant.0, args.direct), extent)?;
+    let mut renderer = Renderer::new(ctx, &scene, &model, (args.variant.0, direct), extent)?;
     eprintln!(
         "{} on {} ({} network pass, pipelines ready in {:.1} s)",
         scene.name,
