@@ -72,6 +72,10 @@ pub struct Metadata {
     pub networks: Vec<NetworkInfo>,
     /// Objects that got no network, and why. They render black.
     pub untrained: Vec<Untrained>,
+    /// Objects whose networks also learned their neighbours' samples, being short of their
+    /// own, and from where: their light is an approximation.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub borrowed: Vec<Untrained>,
     /// The settings the model was baked with.
     pub bake: serde_json::Value,
     /// The half-width of the band around each kd-tree cut across which the leaves that meet

@@ -394,3 +394,37 @@ fn blended_leaves_do_not_step_across_their_cut() {
     assert!(cuts > 0, "no leaves disagree at their cut: nothing to blend");
     assert!(worst < 0.005, "across a cut the blend steps by {worst} of the leaves' disagreement");
 }
+
+/// An object that no ray from the camera box reaches (here the Cornell box's short block,
+/// moved behind the back wall) still gets networks, from the samples nearest to it on its
+/// neighbours, and the model says so; its front, facing the room as the back wall does, is not
+/// black.
+#[test]
+fn an_object_short_of_samples_borrows_its_neighbours() {
+    let mut scene = scene("cornell-box");
+    let short = scene.object_by_name("ShortBlock").unwrap().id as usize;
+    scene.objects[short].positions.iter_mut().for_each(|p| p.z += 1.0);
+    let settings = BakeSettings::new(Quality::Test, 1, &scene);
+    let (model, _) = bake(&scene, &settings, &scratch("borrowed"), &Quiet).unwrap();
+    assert!(model.metadata.untrained.is_empty(), "{:?}", model.metadata.untrained);
+    let [note] = &model.metadata.borrowed[..] else { panic!("{:?}", model.metadata.borrowed) };
+    assert_eq!((note.object.as_str(), note.samples), ("ShortBlock", 0));
+    assert!(note.reason.contains("BackWall"), "the back wall is nearest: {}", note.reason);
+    let light = scene.moving_light.as_ref().unwrap().bounds;
+    let light = (light.min + light.max) * 0.5;
+    for component in Component::ALL {
+        let leaves = model.networks("ShortBlock", component);
+        assert!(!leaves.is_empty(), "{component:?}");
+        let object = &scene.objects[short];
+        for (p, n) in object.positions.iter().zip(&object.normals) {
+            let raw = rrf_baker::network::raw_inputs(*p, rrf_baker::glam::Vec3::Z, light, *n, 0.5);
+            let radiance = rrf_baker::network::evaluate_blended(&leaves, &raw);
+            assert!(radiance.is_finite(), "{component:?} at {p}: {radiance}");
+            if n.z < -0.9 {
+                assert!(radiance.min_element() > 0.0, "{component:?} on the front at {p}: {radiance}");
+            }
+        }
+    }
+    let round_trip = Model::from_bytes(&model.to_bytes().unwrap()).unwrap();
+    assert_eq!(round_trip.metadata.borrowed, model.metadata.borrowed);
+}

@@ -136,9 +136,7 @@ impl NetworkUnit<'_> {
     fn blends(&self) -> bool {
         self.direct.blend.has_band() || self.indirect.blend.has_band()
     }
-}
 
-impl NetworkUnit<'_> {
     fn check(&self, objects: usize) -> Result<()> {
         if self.direct.params.len() != PARAMETERS || self.indirect.params.len() != PARAMETERS {
             return Err(Error::Invalid(format!("object {}: a network must have {PARAMETERS} parameters", self.object)));

@@ -108,12 +108,15 @@ impl BakeProgress for Bars {
 }
 
 /// The model to render `scene` with (`path`, or the scene's own), checked against the scene,
-/// with a warning for each object it has no network for.
+/// with a warning for each object it has no network for or whose networks borrowed samples.
 pub fn model_to_render(scene: &Scene, path: Option<&Path>) -> Result<Model> {
     let path = path.map_or_else(|| scene.model_file(), Path::to_path_buf);
     let model = Model::load(&path, Some(scene))?;
     for u in &model.metadata.untrained {
         eprintln!("warning: {} has no network ({}); it renders black", u.object, u.reason);
+    }
+    for u in &model.metadata.borrowed {
+        eprintln!("warning: {}'s light is approximate: it has {}", u.object, u.reason);
     }
     Ok(model)
 }
@@ -258,6 +261,7 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             "aimed_objects": report.aimed_objects,
             "networks": networks,
             "untrained": model.metadata.untrained,
+            "borrowed": model.metadata.borrowed,
         });
         println!("{line}");
         return Ok(());
@@ -305,6 +309,9 @@ pub fn run(args: &BakeArgs) -> Result<()> {
     }
     for u in &model.metadata.untrained {
         eprintln!("  warning: {} has no network: {}", u.object, u.reason);
+    }
+    for u in &model.metadata.borrowed {
+        eprintln!("  warning: {} has {}", u.object, u.reason);
     }
     eprintln!("\nwrote {}", output.display());
     Ok(())

@@ -32,6 +32,7 @@ use crate::scene::{BakeOverrides, Scene};
 use crate::trace::integrator::non_finite_dropped;
 use crate::trace::sampling::mix64;
 use crate::trace::{Geometry, TraceSettings};
+use glam::Vec3;
 use samples::{latin_hypercube, sample_configuration, Aim, Sample, SurfacePoints, SAMPLE_BYTES};
 use serde::Deserialize;
 use train::train_tree;
@@ -468,24 +469,39 @@ pub fn bake_part(
         by_object[s.object as usize].push(s);
     }
     let mut untrained = Vec::new();
+    let mut borrowed = Vec::new();
     let mut jobs = Vec::new();
+    let lent: Vec<Option<(Vec<Sample>, String)>> = scene
+        .objects
+        .iter()
+        .map(|o| {
+            let short = learns(scene, o.id) && by_object[o.id as usize].len() < settings.min_samples;
+            short.then(|| borrow_samples(scene, &all, o.id, settings.min_samples)).flatten()
+        })
+        .collect();
     for object in &scene.objects {
         if !learns(scene, object.id) {
             continue; // emitters show their emission; no network
         }
-        let samples = &by_object[object.id as usize];
-        if samples.len() < settings.min_samples {
-            untrained.push(Untrained {
-                object: object.name.clone(),
-                samples: samples.len(),
-                reason: format!(
-                    "{} samples, fewer than the {} needed, even with rays aimed at it: the object is hardly \
-                     visible from the camera box",
-                    samples.len(),
-                    settings.min_samples
-                ),
-            });
-            continue;
+        let own = by_object[object.id as usize].len();
+        if own < settings.min_samples {
+            match &lent[object.id as usize] {
+                Some((extra, reason)) => {
+                    by_object[object.id as usize].extend(extra);
+                    borrowed.push(Untrained { object: object.name.clone(), samples: own, reason: reason.clone() });
+                }
+                None => {
+                    untrained.push(Untrained {
+                        object: object.name.clone(),
+                        samples: own,
+                        reason: format!(
+                            "{own} samples, and the whole bake fewer than the {} a network needs",
+                            settings.min_samples
+                        ),
+                    });
+                    continue;
+                }
+            }
         }
         for component in Component::ALL.into_iter().filter(|&c| settings.trained.trains(c)) {
             jobs.push((object.id, component));
@@ -574,6 +590,7 @@ pub fn bake_part(
         activation: "tanh".into(),
         networks: networks.iter().map(|(_, info)| info.clone()).collect(),
         untrained,
+        borrowed,
         bake: serde_json::to_value(settings).expect("settings serialise"),
         blend_band: settings.blend_band,
         checksum: String::new(),
@@ -600,6 +617,49 @@ const AIM_BELOW: usize = 4;
 const AIMED_RAYS: usize = 16;
 /// Separates the random streams of aimed rays from those of rays over the sphere.
 const AIMED_STREAM: u64 = 0xa1e5_0000_0000_0001;
+
+/// For `object`, short of the `min_samples` a network needs even after aimed rays (it is
+/// hardly visible from the camera box), the samples of other objects nearest to its bounding
+/// box that make up the difference, moved to the nearest point of its box, and what to
+/// report: its networks then learn the light of the surfaces around it, an approximation that
+/// never renders black. `None` if the whole bake has too few samples.
+fn borrow_samples(scene: &Scene, all: &[Sample], object: u32, min_samples: usize) -> Option<(Vec<Sample>, String)> {
+    let own = all.iter().filter(|s| s.object == object).count();
+    let wanted = min_samples - own;
+    if all.len() - own < wanted {
+        return None;
+    }
+    let positions = &scene.objects[object as usize].positions;
+    let min = positions.iter().copied().fold(Vec3::splat(f32::INFINITY), Vec3::min);
+    let max = positions.iter().copied().fold(Vec3::splat(f32::NEG_INFINITY), Vec3::max);
+    let position = |s: &Sample| Vec3::new(s.inputs[0], s.inputs[1], s.inputs[2]);
+    let mut others: Vec<(f32, usize)> = all
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.object != object)
+        .map(|(i, s)| ((position(s).clamp(min, max) - position(s)).length(), i))
+        .collect();
+    others.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let mut sources: Vec<&str> =
+        others[..wanted].iter().map(|&(_, i)| scene.objects[all[i].object as usize].name.as_str()).collect();
+    sources.sort_unstable();
+    sources.dedup();
+    let reason = format!(
+        "{own} samples of its own, fewer than the {min_samples} a network needs even with rays aimed at it (it is \
+         hardly visible from the camera box): its networks also learned the {wanted} samples nearest to it, on {}",
+        sources.join(", ")
+    );
+    let moved = others[..wanted]
+        .iter()
+        .map(|&(_, i)| {
+            let mut s = all[i];
+            let moved = position(&s).clamp(min, max);
+            s.inputs[..3].copy_from_slice(&moved.to_array());
+            s
+        })
+        .collect();
+    Some((moved, reason))
+}
 
 /// Whether `object` gets networks: every object but pure emitters, which show their emission.
 fn learns(scene: &Scene, object: u32) -> bool {
