@@ -11,6 +11,7 @@ use anyhow::Result;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::network::{Component, Network};
+use rrf_baker::partition::Region;
 use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
 use rrf_renderer::network_pass::{
@@ -28,11 +29,19 @@ use crate::gpu_scene::{
 };
 use crate::shaders;
 
-/// The network units of the scene's objects: per object, every pair of one of its direct
-/// networks and one of its indirect networks whose blend supports meet (one unit for an object
-/// that was not split). Objects without networks get none. With analytic direct light only
-/// the indirect networks are needed: each is a unit, with itself as a stand-in for the direct
-/// network (the pass never evaluates it) over the whole object.
+/// The network units of the scene's objects: per object, pairs of one of its direct networks
+/// and one of its indirect networks whose weights sum to one everywhere (one unit for an
+/// object that was not split). Objects without networks get none. With analytic direct light
+/// only the indirect networks are needed: each is a unit, with itself as a stand-in for the
+/// direct network (the pass never evaluates it) over the whole object.
+///
+/// The bake cuts every node at the midpoint of its box's longest side, so an object's direct
+/// and indirect trees are parts of one tree, and two of their leaves are either nested (the
+/// cuts of one begin with all of the other's) or apart (on the two sides of one cut). Then the
+/// units are the nested pairs, weighing what the deeper leaf weighs: the leaves of the two
+/// trees' common refinement, as many as the finer tree has leaves. Trees that are not parts of
+/// one tree (a model from elsewhere) get every pair whose supports meet, weighing the product
+/// of the two leaves' weights.
 pub fn network_units<'a>(scene: &Scene, model: &'a Model, direct: Direct) -> Vec<NetworkUnit<'a>> {
     let weights = |n: &'a Network| NetworkWeights {
         params: &n.params,
@@ -41,29 +50,62 @@ pub fn network_units<'a>(scene: &Scene, model: &'a Model, direct: Direct) -> Vec
         output_scale: n.output_scale,
         blend: LeafBlend { min: n.blend.min, max: n.blend.max, min_band: n.blend.min_band, max_band: n.blend.max_band },
     };
+    let whole = |n: &'a Network| NetworkWeights { blend: LeafBlend::WHOLE, ..weights(n) };
     let mut units = Vec::new();
     for (id, o) in scene.objects.iter().enumerate() {
         let indirect = model.networks(&o.name, Component::Indirect);
         if direct == Direct::Analytic {
-            let unit = |i: &&'a Network| NetworkUnit {
-                object: id,
-                direct: NetworkWeights { blend: LeafBlend::WHOLE, ..weights(i) },
-                indirect: weights(i),
-            };
+            let unit = |i: &&'a Network| NetworkUnit { object: id, direct: whole(i), indirect: weights(i) };
             units.extend(indirect.iter().map(unit));
             continue;
         }
-        for d in model.networks(&o.name, Component::Direct) {
-            for i in &indirect {
-                let (d_min, d_max) = d.blend.support();
-                let (i_min, i_max) = i.blend.support();
-                if (0..3).all(|a| d_min[a].max(i_min[a]) < d_max[a].min(i_max[a])) {
-                    units.push(NetworkUnit { object: id, direct: weights(d), indirect: weights(i) });
+        let direct = model.networks(&o.name, Component::Direct);
+        let pairs = || direct.iter().flat_map(|d| indirect.iter().map(move |i| (*d, *i)));
+        let one_tree = pairs().all(|(d, i)| relation(&d.region, &i.region) != Relation::Unrelated);
+        for (d, i) in pairs() {
+            let unit = match relation(&d.region, &i.region) {
+                Relation::Nested { direct_deeper: true } if one_tree => (weights(d), whole(i)),
+                Relation::Nested { direct_deeper: false } if one_tree => (whole(d), weights(i)),
+                _ if one_tree => continue,
+                _ => {
+                    let (d_min, d_max) = d.blend.support();
+                    let (i_min, i_max) = i.blend.support();
+                    if !(0..3).all(|a| d_min[a].max(i_min[a]) < d_max[a].min(i_max[a])) {
+                        continue;
+                    }
+                    (weights(d), weights(i))
                 }
-            }
+            };
+            units.push(NetworkUnit { object: id, direct: unit.0, indirect: unit.1 });
         }
     }
     units
+}
+
+/// How a leaf of an object's direct tree and one of its indirect tree lie (see
+/// [`network_units`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Relation {
+    /// The cuts of one begin with all of the other's; `direct_deeper` when the direct leaf
+    /// has more cuts, or as many (the same leaf).
+    Nested { direct_deeper: bool },
+    /// On the two sides of one cut.
+    Apart,
+    /// Cut differently: not parts of one tree.
+    Unrelated,
+}
+
+fn relation(direct: &Region, indirect: &Region) -> Relation {
+    let common = direct.0.iter().zip(&indirect.0).take_while(|(a, b)| a == b).count();
+    if common == direct.0.len().min(indirect.0.len()) {
+        return Relation::Nested { direct_deeper: direct.0.len() >= indirect.0.len() };
+    }
+    let (a, b) = (direct.0[common], indirect.0[common]);
+    if a.axis == b.axis && a.at == b.at {
+        Relation::Apart
+    } else {
+        Relation::Unrelated
+    }
 }
 
 /// The RGB of read-back RGBA pixels.

@@ -73,7 +73,7 @@ fn compare_with(
     let geometry = Geometry::new(&scene);
     let world = World::with_lights(&scene, &geometry, lights);
     let camera = Camera::new(&view, width as f32 / height as f32);
-    let cpu = predict_image(&world, &camera, &model, (width, height), direct.into());
+    let cpu = predict_image(&world, &camera, &model, (width, height), direct.cpu(&scene));
 
     for (variant, pixels) in &rendered {
         let variant = variant.name();
