@@ -7,6 +7,7 @@ use anyhow::{bail, Context as _, Result};
 use clap::Args;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
+use rrf_baker::network::Component;
 use rrf_baker::predict::predict_image;
 use rrf_baker::scene::{EvalDefaults, PlacedLight, Scene};
 use rrf_baker::trace::render::RenderSettings;
@@ -189,7 +190,12 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             let predicted = predict(&predictor, &scene, &geometry, &model, config, width, height)?;
             let figure = format!("{:02}-{}.png", i, config.name);
             let hits = pixel_hits(&scene, &geometry, config, (width, height));
-            let cuts = Cuts { scene: &scene, model: &model, hits: &hits };
+            // Analytic direct light has no cuts: only the indirect trees show.
+            let components: &[Component] = match direct {
+                Direct::Analytic => &[Component::Indirect],
+                _ => &Component::ALL,
+            };
+            let cuts = Cuts { scene: &scene, model: &model, components, hits: &hits };
             let Scores { metrics, baselines, seams } =
                 evaluate(&predicted, &truth.pixels, (width, height), settings.spp, cuts, &args.output.join(&figure))?;
             let worst_seam = seams.iter().max_by(|a, b| a.excess().total_cmp(&b.excess())).cloned();
@@ -368,6 +374,8 @@ struct Scores {
 struct Cuts<'a> {
     scene: &'a Scene,
     model: &'a Model,
+    /// The components whose networks the predictions use.
+    components: &'a [Component],
     hits: &'a [Option<Hit>],
 }
 
@@ -389,7 +397,8 @@ fn evaluate(
     let metrics = ComponentMetrics { gi: gi.metrics, direct: direct.metrics, indirect: indirect.metrics };
 
     let mut images = [&p.direct, &p.indirect, &p.gi, &true_gi, &p.gi].map(|pixels| tonemap_rgb8(pixels, 0.0));
-    let (seams, on_cut) = seams(cuts.scene, cuts.model, cuts.hits, &images[2], &images[3], (width, height));
+    let (seams, on_cut) =
+        seams(cuts.scene, cuts.model, cuts.components, cuts.hits, &images[2], &images[3], (width, height));
     // The last panel: the prediction with the pixels that straddle a cut in magenta.
     for (rgb, _) in images[4].chunks_exact_mut(3).zip(&on_cut).filter(|(_, &cut)| cut) {
         rgb.copy_from_slice(&[255, 0, 255]);

@@ -71,12 +71,13 @@ pub struct Hit {
     pub normal: Vec3,
 }
 
-/// Every cut with enough pixel pairs in a configuration, given its pixel `hits` and the
-/// predicted and reference images in display RGB8 (`width` × `height`), and a mask of the
-/// pixels of every pair (to draw the cuts).
+/// Every cut of the trees of `components` with enough pixel pairs in a configuration, given
+/// its pixel `hits` and the predicted and reference images in display RGB8 (`width` ×
+/// `height`), and a mask of the pixels of every pair (to draw the cuts).
 pub fn seams(
     scene: &Scene,
     model: &Model,
+    components: &[Component],
     hits: &[Option<Hit>],
     predicted: &[u8],
     reference: &[u8],
@@ -95,7 +96,7 @@ pub fn seams(
                 .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
             (max - min).max_element()
         };
-        for component in Component::ALL {
+        for &component in components {
             for (node, axis, at) in
                 cuts(&model.networks(&object.name, component).iter().map(|n| &n.region).collect::<Vec<_>>())
             {
