@@ -155,7 +155,8 @@ pub enum FrameOutput {
     /// tonemapped from one of them: `rrf render`, `eval`, `bench`.
     Radiance,
     /// Only the display image, written by the network pass itself: the walkthrough. The
-    /// storage variant, which cannot, falls back to `Radiance`.
+    /// storage variant, which cannot, and models whose kd-tree leaves blend (their units add
+    /// to each other's radiance) fall back to `Radiance`.
     Display,
 }
 
@@ -298,7 +299,9 @@ impl GpuFrame {
         };
         let units = network_units(scene, model, direct);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
-        let display = (output == FrameOutput::Display && variant != Variant::Storage).then_some(&*ldr);
+        // Units that blend add to each other's radiance images; the frame then tonemaps those.
+        let blended = units.iter().any(NetworkUnit::blends);
+        let display = (output == FrameOutput::Display && variant != Variant::Storage && !blended).then_some(&*ldr);
         let materials = network_materials(scene);
         let direct = match direct {
             Direct::Auto | Direct::Learned => DirectLight::Learned,

@@ -132,8 +132,9 @@ pub struct NetworkUnit<'a> {
 }
 
 impl NetworkUnit<'_> {
-    /// Whether the unit blends with another somewhere.
-    fn blends(&self) -> bool {
+    /// Whether the unit blends with another somewhere: then the pass must write radiance
+    /// images, not a display image.
+    pub fn blends(&self) -> bool {
         self.direct.blend.has_band() || self.indirect.blend.has_band()
     }
 
@@ -228,10 +229,9 @@ fn specializations(
     words[1] = u32::from(tiled);
     words[2] = u32::from(analytic);
     words[4] = index as u32;
-    // OBJECT_FIRST_UNIT, OBJECT_UNITS, OBJECTS.
+    // OBJECT_FIRST_UNIT, OBJECTS.
     words[5] = units.iter().position(|u| u.object == unit.object).expect("the unit itself") as u32;
-    words[6] = units.iter().filter(|u| u.object == unit.object).count() as u32;
-    words[7] = objects.max(1) as u32;
+    words[6] = objects.max(1) as u32;
     let (direct, indirect) = (unit.direct.folded(), unit.indirect.folded());
     for (word, value) in words[FIRST_PARAMETER_ID..].iter_mut().zip(direct.iter().chain(&indirect)) {
         *word = value.to_bits();
@@ -472,10 +472,6 @@ struct Specialized {
     /// Whether units blend: each unit's dispatch then adds to what the ones before it wrote,
     /// as a pass of its own, after a barrier.
     blended: bool,
-    /// A display pass's sum of the blending units' radiance at a pixel, until the last
-    /// tonemaps it: the image's size when units blend, 1×1 otherwise; `None` for a pass that
-    /// writes radiance images.
-    blend_sum: Option<Image>,
 }
 
 impl NetworkPass {
@@ -583,9 +579,6 @@ impl NetworkPass {
                 Direct::Learned { stand_in } => states.set_layout(stand_in, vk::ImageLayout::GENERAL),
                 Direct::Analytic { shadow, .. } => shadow.register(states),
             }
-            if let Some(sum) = &s.blend_sum {
-                states.set_layout(sum, vk::ImageLayout::GENERAL);
-            }
         }
     }
 
@@ -608,12 +601,7 @@ impl NetworkPass {
             }
             Kind::Storage { .. } => (None, 0),
         };
-        let tiles = ctx.guard(tiles);
-        let blend_sum = match &self.kind {
-            Kind::Specialized(s) if s.blend_sum.is_some() => Some(blend_sum_image(ctx, s.blended, extent)?),
-            _ => None,
-        };
-        let (tiles, blend_sum) = (tiles.keep().map(|t| (t, capacity)), blend_sum);
+        let tiles = tiles.map(|t| (t, capacity));
         std::mem::replace(&mut self.outputs, outputs.keep()).destroy(ctx);
         self.extent = extent;
         let written = Written::of(&self.outputs, display)?;
@@ -625,9 +613,6 @@ impl NetworkPass {
                 if let Some((tiles, capacity)) = tiles {
                     ctx.destroy_buffer(std::mem::replace(&mut s.tiles, tiles));
                     s.tile_capacity = capacity;
-                }
-                if let Some(sum) = blend_sum {
-                    std::mem::replace(&mut s.blend_sum, Some(sum)).destroy(ctx);
                 }
                 let bindings = classify_bindings(gbuffer, shared, &s.dispatch, &s.tiles, written);
                 s.classify.rebind(ctx, &bindings);
@@ -724,7 +709,6 @@ impl NetworkPass {
                 // Blending units read what the units before them wrote.
                 let written = if s.blended { Access::COMPUTE_READ_WRITE } else { Access::COMPUTE_WRITE };
                 uses.extend(writes.iter().map(|w| Use { access: written, ..*w }));
-                uses.extend(s.blend_sum.iter().map(|sum| Use::image(sum, Access::COMPUTE_READ_WRITE)));
                 if !s.dispatch_reset.is_empty() {
                     passes.push(reset);
                 }
@@ -776,7 +760,6 @@ impl Destroy for Specialized {
         self.classify.destroy(ctx);
         self.networks.destroy(ctx);
         self.direct.destroy(ctx);
-        self.blend_sum.destroy(ctx);
         for buffer in [self.dispatch, self.tiles] {
             ctx.destroy_buffer(buffer);
         }
@@ -911,6 +894,9 @@ fn specialized(
     let specializations: Vec<Specialization> =
         (0..units.len()).flat_map(|index| specializations(objects, units, index, tiled, analytic)).collect();
     let blended = units.iter().any(NetworkUnit::blends);
+    if blended && matches!(written, Written::Display(_)) {
+        return Err(Error::Invalid("blending network units write radiance images, not a display image".into()));
+    }
     let dispatch_reset: Vec<u32> = units.iter().flat_map(|_| [0, 1, 1]).collect();
 
     let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
@@ -944,12 +930,7 @@ fn specialized(
             Direct::Analytic { light, shadow: ShadowPass::new(ctx, shadow_vertex, shadow_fragment)? }
         }
     });
-    let blend_sum = match written {
-        Written::Display(_) => Some(blend_sum_image(ctx, blended, gbuffer.extent)?),
-        Written::Radiance(_) => None,
-    };
-    let blend_sum = ctx.guard(blend_sum);
-    let bindings = specialized_bindings(gbuffer, shared, &tiles, written, &direct, blend_sum.as_ref());
+    let bindings = specialized_bindings(gbuffer, shared, &tiles, written, &direct);
     let networks = ComputePass::specialized(
         ctx,
         "network (specialization constants)",
@@ -970,34 +951,21 @@ fn specialized(
         tile_capacity,
         direct: direct.keep(),
         blended,
-        blend_sum: blend_sum.keep(),
     })
 }
 
 /// The bindings of `network_specialized_main.glsl`: [`network_bindings`] with the shadow maps
-/// last, then for a display pass the blend sum, then the unit table.
+/// last, then the unit table.
 fn specialized_bindings<'a>(
     gbuffer: &'a GBufferTargets,
     shared: Shared<'a>,
     tiles: &'a Buffer,
     written: Written<'a>,
     direct: &'a Direct,
-    blend_sum: Option<&'a Image>,
 ) -> Vec<Bind<'a>> {
     let mut binds = network_bindings(gbuffer, shared, tiles, written, Bind::StorageImage(direct.shadow_maps()));
-    binds.extend(blend_sum.map(Bind::StorageImage));
     binds.push(Bind::StorageBuffer(shared.units));
     binds
-}
-
-/// A display pass's blend sum: an RGBA32F image of `extent` when units blend, else a 1×1
-/// stand-in that no pixel reaches; in `GENERAL` layout.
-fn blend_sum_image(ctx: &Context, blended: bool, extent: vk::Extent2D) -> Result<Image> {
-    let extent = if blended { extent } else { vk::Extent2D { width: 1, height: 1 } };
-    let usage = vk::ImageUsageFlags::STORAGE;
-    let image = ctx.guard(ctx.create_image("network blend sum", extent, vk::Format::R32G32B32A32_SFLOAT, usage)?);
-    ctx.submit_once(|cmd| ctx.transition(cmd, &image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL))?;
-    Ok(image.keep())
 }
 
 /// `words` as bytes, with at least one word: Vulkan buffers cannot be empty.
@@ -1009,7 +977,7 @@ fn pad(words: &[u32]) -> &[u8] {
 impl Specialized {
     /// The networks' bindings at the current size.
     fn bindings<'a>(&'a self, gbuffer: &'a GBufferTargets, shared: Shared<'a>, written: Written<'a>) -> Vec<Bind<'a>> {
-        specialized_bindings(gbuffer, shared, &self.tiles, written, &self.direct, self.blend_sum.as_ref())
+        specialized_bindings(gbuffer, shared, &self.tiles, written, &self.direct)
     }
 
     /// The networks' push constants for a frame with constants `c`.

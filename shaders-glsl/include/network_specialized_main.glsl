@@ -15,8 +15,8 @@
 //
 // Where the unit's weight is below one (network_units.glsl: a band where kd-tree leaves
 // blend), the units that meet there add their weighted radiance in the order they are
-// dispatched, with a barrier between dispatches: the first stores, the others load and add,
-// and in DISPLAY mode the sum is kept in `blend_sum` until the last one tonemaps it.
+// dispatched, with a barrier between dispatches: the first stores, the others load and add.
+// Only the radiance images blend; the host gives DISPLAY pipelines no blending units.
 #ifndef RRF_NETWORK_SPECIALIZED_MAIN_GLSL
 #define RRF_NETWORK_SPECIALIZED_MAIN_GLSL
 
@@ -30,12 +30,11 @@ layout(constant_id = 2) const bool ANALYTIC = false;
 // the networks about 50% slower inside a loop, even one that runs once, and most frames have
 // one light (BENCHMARKS.md, "Several lights").
 layout(constant_id = 3) const bool SEVERAL_LIGHTS = false;
-// The unit's index (its tile list and its entry in the unit table), its object's first unit
-// and unit count, and the number of object entries in the unit table (network_units.glsl).
+// The unit's index (its tile list and its entry in the unit table), its object's first unit,
+// and the number of object entries in the unit table (network_units.glsl).
 layout(constant_id = 4) const uint UNIT = 0u;
 layout(constant_id = 5) const uint OBJECT_FIRST_UNIT = 0u;
-layout(constant_id = 6) const uint OBJECT_UNITS = 1u;
-layout(constant_id = 7) const uint OBJECTS = 1u;
+layout(constant_id = 6) const uint OBJECTS = 1u;
 
 // Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
 layout(binding = 5) readonly buffer Tiles { uint tiles[]; };
@@ -43,9 +42,7 @@ layout(binding = 5) readonly buffer Tiles { uint tiles[]; };
 layout(binding = 6, rgba8) uniform writeonly image2D display;
 // The point lights' cube shadow maps (ANALYTIC; a 1×1 stand-in otherwise).
 layout(binding = 7, r32f) uniform readonly image2D shadow_atlas;
-// The weighted sum so far of the units that blend at a pixel, before tonemapping.
-layout(binding = 8, rgba32f) uniform image2D blend_sum;
-#define UNITS_BINDING 9
+#define UNITS_BINDING 8
 #else
 layout(binding = 6, rgba32f) uniform image2D out_direct;
 layout(binding = 7, rgba32f) uniform image2D out_indirect;
@@ -76,12 +73,9 @@ layout(push_constant) uniform Constants {
 #include "tonemap.glsl"
 #endif
 
-// Whether a unit of this pipeline's object dispatched before this one (`earlier`) or after
-// it has a weight at `p`.
-bool others_weigh(bool earlier, vec3 p) {
-    uint begin = earlier ? OBJECT_FIRST_UNIT : UNIT + 1u;
-    uint end = earlier ? UNIT : OBJECT_FIRST_UNIT + OBJECT_UNITS;
-    for (uint u = begin; u < end; ++u) {
+// Whether a unit of this pipeline's object dispatched before this one has a weight at `p`.
+bool earlier_units_weigh(vec3 p) {
+    for (uint u = OBJECT_FIRST_UNIT; u < UNIT; ++u) {
         if (unit_weight(OBJECTS, u, p) > 0.0) {
             return true;
         }
@@ -148,16 +142,6 @@ void main() {
     vec3 shown = constants.shown == 1u ? direct
                : constants.shown == 2u ? indirect
                : surface_emission(id, shading) + direct + indirect;
-    if (weight < 1.0) {
-        shown *= weight;
-        if (others_weigh(true, p)) {
-            shown += imageLoad(blend_sum, pixel).rgb;
-        }
-        if (others_weigh(false, p)) {
-            imageStore(blend_sum, pixel, vec4(shown, 1.0));
-            return;
-        }
-    }
     imageStore(display, pixel, vec4(tonemap(shown, constants.exposure_scale), 1.0));
 #else
     vec3 gi = surface_emission(id, shading) + direct + indirect;
@@ -165,7 +149,7 @@ void main() {
         direct *= weight;
         indirect *= weight;
         gi *= weight;
-        if (others_weigh(true, p)) {
+        if (earlier_units_weigh(p)) {
             direct += imageLoad(out_direct, pixel).rgb;
             indirect += imageLoad(out_indirect, pixel).rgb;
             gi += imageLoad(out_gi, pixel).rgb;

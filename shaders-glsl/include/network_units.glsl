@@ -17,12 +17,18 @@
 
 layout(std430, binding = UNITS_BINDING) readonly buffer Units { float units[]; };
 
+// The weights are `precise` (no fused or reordered arithmetic): every unit's pipeline
+// computes the weights of the others at its pixels to know whether it adds to them or
+// finishes the sum, and must get exactly what each computes for itself, however the driver
+// compiles the code around it.
+
 // 0 below the band at ± band, 1 above it, a smoothstep across it; without a band, the step
 // x >= at. The twin of `rising` in baker/src/partition.rs.
 float rising(float x, float at, float band) {
     if (band > 0.0) {
-        float t = clamp((x - (at - band)) / (2.0 * band), 0.0, 1.0);
-        return t * t * (3.0 - 2.0 * t);
+        precise float t = clamp((x - (at - band)) / (2.0 * band), 0.0, 1.0);
+        precise float s = t * t * (3.0 - 2.0 * t);
+        return s;
     }
     return x >= at ? 1.0 : 0.0;
 }
@@ -30,10 +36,11 @@ float rising(float x, float at, float band) {
 // The weight at `p` of the leaf whose blend box starts at units[b]: the twin of
 // `BlendBox::weight` in baker/src/partition.rs.
 float leaf_weight(uint b, vec3 p) {
-    float w = 1.0;
+    precise float w = 1.0;
     for (uint a = 0u; a < 3u; ++a) {
-        w *= rising(p[a], units[b + a], units[b + 6u + a])
-           * (1.0 - rising(p[a], units[b + 3u + a], units[b + 9u + a]));
+        precise float low = rising(p[a], units[b + a], units[b + 6u + a]);
+        precise float high = 1.0 - rising(p[a], units[b + 3u + a], units[b + 9u + a]);
+        w *= low * high;
     }
     return w;
 }
@@ -41,7 +48,8 @@ float leaf_weight(uint b, vec3 p) {
 // Unit `u`'s weight at `p`, in a table of `objects` object entries.
 float unit_weight(uint objects, uint u, vec3 p) {
     uint b = 2u * objects + u * UNIT_BLEND;
-    return leaf_weight(b, p) * leaf_weight(b + UNIT_BLEND / 2u, p);
+    precise float w = leaf_weight(b, p) * leaf_weight(b + UNIT_BLEND / 2u, p);
+    return w;
 }
 
 // The first unit of object (id - 1) `object`, and how many it has.
