@@ -413,7 +413,10 @@ impl GpuFrame {
     /// an upper bound where a pass touches only some pixels (the classification's background).
     pub fn bytes_per_pixel(&self, ctx: &Context, settings: &FrameSettings) -> Result<u32> {
         let passes = self.passes(ctx, settings, None, None, vec![])?;
-        let bytes = passes.iter().flat_map(|p| &p.uses).map(|u| match u.resource {
+        // Blended network units are a pass each, each over its own pixels: together they
+        // touch a pixel's images about once, as one pass does.
+        let distinct = passes.iter().enumerate().filter(|(i, p)| *i == 0 || passes[i - 1].name != p.name);
+        let bytes = distinct.flat_map(|(_, p)| &p.uses).map(|u| match u.resource {
             Resource::Image { texel_bytes, .. } => texel_bytes,
             Resource::Buffer(_) => 0,
         });
