@@ -119,7 +119,7 @@ pub const MAX_BLEND_BAND: f32 = 0.15;
 /// A kd-tree leaf's weight over space: 1 inside its box away from its cut faces, 0 outside
 /// the box grown by the bands, and a smoothstep across each band, falling where its sibling's
 /// rises, so that the two sum to one. A face without a band is a hard, half-open cut. The
-/// renderer's twin is `blend_weight` in `network_units.glsl`.
+/// renderer's twin is `leaf_weight` in `network_units.glsl`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BlendBox {
     pub min: [f32; 3],

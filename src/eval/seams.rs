@@ -89,13 +89,8 @@ pub fn seams(
     let mut mask = vec![false; hits.len()];
     let mut out = Vec::new();
     for object in &scene.objects {
-        let extent = {
-            let (min, max) = object
-                .positions
-                .iter()
-                .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-            (max - min).max_element()
-        };
+        let bounds = object.bounds();
+        let extent = (bounds.max - bounds.min).max_element();
         for &component in components {
             for (node, axis, at) in
                 cuts(&model.networks(&object.name, component).iter().map(|n| &n.region).collect::<Vec<_>>())

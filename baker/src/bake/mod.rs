@@ -28,7 +28,7 @@ use serde::Serialize;
 use crate::hash::Fnv64;
 use crate::model::{Metadata, Model, NetworkInfo, Untrained, FORMAT_VERSION, INPUT_NAMES};
 use crate::network::{Component, Network, HIDDEN1, HIDDEN2, OUTPUTS};
-use crate::scene::{BakeOverrides, Scene};
+use crate::scene::{Aabb, BakeOverrides, Scene};
 use crate::trace::integrator::non_finite_dropped;
 use crate::trace::sampling::mix64;
 use crate::trace::{Geometry, TraceSettings};
@@ -629,9 +629,7 @@ fn borrow_samples(scene: &Scene, all: &[Sample], object: u32, min_samples: usize
     if all.len() - own < wanted {
         return None;
     }
-    let positions = &scene.objects[object as usize].positions;
-    let min = positions.iter().copied().fold(Vec3::splat(f32::INFINITY), Vec3::min);
-    let max = positions.iter().copied().fold(Vec3::splat(f32::NEG_INFINITY), Vec3::max);
+    let Aabb { min, max } = scene.objects[object as usize].bounds();
     let position = |s: &Sample| Vec3::new(s.inputs[0], s.inputs[1], s.inputs[2]);
     let mut others: Vec<(f32, usize)> = all
         .iter()

@@ -35,7 +35,7 @@ pub struct Node {
 impl Node {
     /// The whole of `object`.
     pub fn root(scene: &Scene, object: u32) -> Node {
-        Node { region: Region::default(), bounds: object_box(scene, object) }
+        Node { region: Region::default(), bounds: scene.objects[object as usize].bounds() }
     }
 
     /// The two halves, split at the midpoint of the longest side (the paper's rule).
@@ -83,14 +83,6 @@ impl Node {
     }
 }
 
-/// The bounding box of `object`'s vertices.
-fn object_box(scene: &Scene, object: u32) -> Aabb {
-    let positions = &scene.objects[object as usize].positions;
-    let min = positions.iter().copied().fold(Vec3::splat(f32::INFINITY), Vec3::min);
-    let max = positions.iter().copied().fold(Vec3::splat(f32::NEG_INFINITY), Vec3::max);
-    Aabb { min, max }
-}
-
 /// Input ranges for `object`'s networks, every leaf's the same: its bounding box for positions,
 /// the light's box for the light, [-1, 1] for directions, [0, 1] for roughness. Shared by the
 /// leaves so that a half starts from its parent's network as it is.
@@ -107,7 +99,7 @@ fn input_ranges(scene: &Scene, object: u32) -> ([f32; INPUTS], [f32; INPUTS]) {
         lo[VIEW_INPUT..VIEW_INPUT + 3].fill(0.0);
         hi[VIEW_INPUT..VIEW_INPUT + 3].fill(0.0);
     }
-    let Aabb { min, max } = object_box(scene, object);
+    let Aabb { min, max } = o.bounds();
     let light = scene.moving_light.as_ref().map(|l| l.bounds);
     for a in 0..3 {
         lo[a] = min[a];

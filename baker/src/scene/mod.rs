@@ -95,6 +95,13 @@ pub struct Object {
 }
 
 impl Object {
+    /// The bounding box of the object's vertices: the root of its kd-trees.
+    pub fn bounds(&self) -> Aabb {
+        let min = self.positions.iter().copied().fold(Vec3::splat(f32::INFINITY), Vec3::min);
+        let max = self.positions.iter().copied().fold(Vec3::splat(f32::NEG_INFINITY), Vec3::max);
+        Aabb { min, max }
+    }
+
     /// The total area of the triangles in `triangles` (a part's range, say), in m².
     pub fn area(&self, triangles: Range<u32>) -> f32 {
         self.triangles[triangles.start as usize..triangles.end as usize]
