@@ -9,7 +9,7 @@ use common::{finish_clean, gpu};
 use rrf::gpu_frame::{Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
-use rrf_baker::network::Component;
+use rrf_baker::network::{Component, ViewInput};
 use rrf_baker::predict::predict_image;
 use rrf_baker::scene::{PlacedLight, Scene};
 use rrf_baker::trace::{Camera, Geometry, Radiance, World};
@@ -26,11 +26,13 @@ fn at(position: Vec3) -> Vec<PlacedLight> {
 }
 
 fn compare(scene_name: &str, view_name: &str, lights: &[PlacedLight], width: u32, height: u32) {
-    compare_with(scene_name, view_name, lights, (width, height), Direct::Learned, &Variant::ALL, 0.999);
+    compare_with(scene_name, view_name, lights, (width, height), Direct::Learned, &Variant::ALL, 0.999, |_| {});
 }
 
 /// The GPU's `variants` against the CPU inference with direct light from `direct`: at least
-/// `share` of the pixels of every component within [`TOLERANCE`].
+/// `share` of the pixels of every component within [`TOLERANCE`]. The shipped model is changed
+/// by `edit` first.
+#[allow(clippy::too_many_arguments)]
 fn compare_with(
     scene_name: &str,
     view_name: &str,
@@ -39,10 +41,12 @@ fn compare_with(
     direct: Direct,
     variants: &[Variant],
     share: f64,
+    edit: fn(&mut Model),
 ) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(scene_name);
     let scene = Scene::load(&dir).unwrap();
-    let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
+    let mut model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
+    edit(&mut model);
     let view = scene.view(view_name).unwrap().clone();
 
     let ctx = gpu();
@@ -152,7 +156,28 @@ fn analytic_direct_matches_the_cpu_many_objects() {
         PlacedLight { position: Vec3::new(-1.2, 2.5, 0.6), scale: Vec3::new(0.3, 0.5, 1.0) },
     ];
     let variants = [Variant::Tiled, Variant::PerObject];
-    compare_with("many-objects", "table", &lights, (120, 80), Direct::Analytic, &variants, 0.95);
+    compare_with("many-objects", "table", &lights, (120, 80), Direct::Analytic, &variants, 0.95, |_| {});
+}
+
+/// Networks that take the view direction mirrored about the normal (glossy objects'), every
+/// variant, learned and analytic direct light: the glossy room's networks, all switched to
+/// the mirrored view, whatever the shipped model's objects take.
+#[test]
+fn gpu_matches_cpu_inference_with_mirrored_views() {
+    let mirror = |model: &mut Model| model.networks.iter_mut().for_each(|n| n.view = ViewInput::Mirror);
+    let light = at(Vec3::new(0.3, 2.6, -0.5));
+    compare_with("glossy-room", "mirror", &light, (96, 64), Direct::Learned, &Variant::ALL, 0.999, mirror);
+    let variants = [Variant::Tiled, Variant::PerObject];
+    compare_with(
+        "many-objects",
+        "table",
+        &at(Vec3::new(0.8, 2.2, -0.5)),
+        (120, 80),
+        Direct::Analytic,
+        &variants,
+        0.95,
+        mirror,
+    );
 }
 
 /// Analytic direct light needs only the indirect networks: a model without its direct

@@ -313,40 +313,59 @@ fn split_depth_bounds_the_kd_tree() {
 }
 
 /// A pure Lambert surface reflects the same light towards every viewer, so its networks get
-/// the direction to the viewer as the constant 0 (an empty input range); one with a specular
-/// lobe sees it.
+/// the direction to the viewer as the constant 0 (an empty input range); one with a rough
+/// specular lobe sees that direction; a glossy one (roughness ≤ 0.5) sees it mirrored about
+/// the normal.
 #[test]
-fn lambert_networks_do_not_see_the_viewpoint() {
+fn view_inputs_follow_the_materials() {
     let mut scene = scene("cornell-box");
-    let tall = scene.object_by_name("TallBlock").unwrap().id as usize;
-    let mut glossy = scene.materials[scene.objects[tall].parts[0].material as usize].clone();
-    glossy.specular = 1.0;
-    scene.materials.push(glossy);
-    let glossy = scene.materials.len() as u32 - 1;
-    scene.objects[tall].parts.iter_mut().for_each(|p| p.material = glossy);
+    let mut restyle = |name: &str, specular: f32, roughness: f32| {
+        let object = scene.object_by_name(name).unwrap().id as usize;
+        let mut material = scene.materials[scene.objects[object].parts[0].material as usize].clone();
+        (material.specular, material.roughness) = (specular, roughness);
+        scene.materials.push(material);
+        let material = scene.materials.len() as u32 - 1;
+        scene.objects[object].parts.iter_mut().for_each(|p| p.material = material);
+    };
+    restyle("TallBlock", 1.0, 1.0);
+    restyle("ShortBlock", 1.0, 0.2);
     let mut settings = BakeSettings::new(Quality::Test, 1, &scene);
     settings.split_depth = 0;
     let (model, _) = bake(&scene, &settings, &scratch("lambert"), &Quiet).unwrap();
 
-    use rrf_baker::network::{Network, INPUTS, VIEW_INPUT};
+    use rrf_baker::network::{Network, ViewInput, INPUTS, NORMAL_INPUT, VIEW_INPUT};
     let view = VIEW_INPUT..VIEW_INPUT + 3;
-    let towards = |n: &Network, to_viewer: [f32; 3]| {
+    let raw = |to_viewer: [f32; 3]| {
         let mut raw = [0.3f32; INPUTS];
         raw[view.clone()].copy_from_slice(&to_viewer);
-        n.evaluate(&raw)
+        raw[NORMAL_INPUT..NORMAL_INPUT + 3].copy_from_slice(&[0.0, 1.0, 0.0]);
+        raw
     };
+    let towards = |n: &Network, to_viewer: [f32; 3]| n.evaluate(&raw(to_viewer));
     let (a, b) = ([0.0, 0.0, -1.0], [0.6, 0.64, -0.48]);
     for n in &model.networks {
         let (lo, hi) = (&n.input_min[view.clone()], &n.input_max[view.clone()]);
-        if n.object == "TallBlock" {
-            assert_eq!((lo, hi), (&[-1.0; 3][..], &[1.0; 3][..]), "{} {:?}", n.object, n.component);
-            assert_ne!(towards(n, a), towards(n, b), "{} {:?}", n.object, n.component);
+        let what = format!("{} {:?}", n.object, n.component);
+        match n.object.as_str() {
+            "TallBlock" | "ShortBlock" => {
+                assert_eq!((lo, hi), (&[-1.0; 3][..], &[1.0; 3][..]), "{what}");
+                assert_ne!(towards(n, a), towards(n, b), "{what}");
+            }
+            _ => {
+                assert_eq!((lo, hi), (&[0.0; 3][..], &[0.0; 3][..]), "{what}");
+                assert_eq!(towards(n, a), towards(n, b), "{what}");
+            }
+        }
+        if n.object == "ShortBlock" {
+            assert_eq!(n.view, ViewInput::Mirror, "{what}");
+            // About the normal +y, b = (0.6, 0.64, -0.48) mirrors to (-0.6, 0.64, 0.48).
+            let as_viewer = Network { view: ViewInput::Viewer, ..n.clone() };
+            assert_eq!(towards(n, b), towards(&as_viewer, [-0.6, 0.64, 0.48]), "{what}");
         } else {
-            assert_eq!((lo, hi), (&[0.0; 3][..], &[0.0; 3][..]), "{} {:?}", n.object, n.component);
-            assert_eq!(towards(n, a), towards(n, b), "{} {:?}", n.object, n.component);
+            assert_eq!(n.view, ViewInput::Viewer, "{what}");
         }
     }
-    assert!(model.networks.iter().any(|n| n.object == "TallBlock"));
+    assert!(["TallBlock", "ShortBlock"].iter().all(|o| model.networks.iter().any(|n| n.object == *o)));
 }
 
 /// Where the kd-tree cuts an object, its two leaves disagree (each learned its own half), but
