@@ -130,3 +130,60 @@ fn a_model_is_never_written_over_another_file() {
     assert!(std::fs::read(&scene).unwrap() == before, "the scene file is untouched");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Two bakes of one model started together, ten times: one bakes and the other says which
+/// bake holds the model and exits non-zero (or, had the first already finished, bakes
+/// again), and the model is whole each time, the same bytes as a bake run alone. With
+/// `--wait` both bake, one after the other, to the same model.
+#[test]
+fn two_bakes_of_one_model_never_meet() {
+    let dir = std::env::temp_dir().join(format!("rrf-bake-pairs-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let args = |output: &Path, wait: bool| {
+        let mut args = vec!["bake", "scenes/cornell-box", "--quality", "test", "--seed", "3", "-o"];
+        args.push(output.to_str().unwrap());
+        if wait {
+            args.push("--wait");
+        }
+        args.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let start = |output: &Path, wait: bool| {
+        Command::new(env!("CARGO_BIN_EXE_rrf"))
+            .args(args(output, wait))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start rrf bake")
+    };
+    let reference = dir.join("reference.safetensors");
+    let alone = start(&reference, false).wait_with_output().unwrap();
+    assert!(alone.status.success(), "{}", String::from_utf8_lossy(&alone.stderr));
+    let expected = std::fs::read(&reference).unwrap();
+
+    for pair in 0..11 {
+        let wait = pair == 10;
+        let model = dir.join(format!("model-{pair}.safetensors"));
+        let bakes = [start(&model, wait), start(&model, wait)];
+        let ids: Vec<u32> = bakes.iter().map(Child::id).collect();
+        let outputs: Vec<_> = bakes.into_iter().map(|b| b.wait_with_output().unwrap()).collect();
+        let refused: Vec<String> = outputs
+            .iter()
+            .filter(|o| !o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stderr).into_owned())
+            .collect();
+        if wait {
+            assert!(refused.is_empty(), "pair {pair}, --wait: both bake: {refused:?}");
+        } else {
+            assert!(refused.len() <= 1, "pair {pair}: at least one bake finishes: {refused:?}");
+            for stderr in &refused {
+                let names_the_other = ids.iter().any(|id| stderr.contains(&format!("process {id}")));
+                assert!(stderr.contains("another bake") && names_the_other, "pair {pair}: {stderr}");
+            }
+        }
+        assert!(std::fs::read(&model).unwrap() == expected, "pair {pair}: the model is not the lone bake's");
+        assert!(!dir.join(format!("model-{pair}.lock")).exists(), "pair {pair}: the lock file is left");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

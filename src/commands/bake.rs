@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
-use rrf_baker::bake::lock::BakeLock;
+use rrf_baker::bake::lock::{BakeLock, Contended};
 use rrf_baker::bake::{bake_part, BakeProgress, BakeReport, BakeSettings, Part, Quality, Stage, Trained};
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
@@ -36,8 +36,8 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Model file to write (.safetensors); default: model.safetensors beside scene.gltf or
-    /// scene.glb, X.safetensors beside any other X.gltf or X.glb. While it bakes, MODEL.lock
-    /// keeps a second bake of the same model out.
+    /// scene.glb, X.safetensors beside any other X.gltf or X.glb. While it bakes, a lock on
+    /// MODEL.lock keeps a second bake of the same model out (see --wait).
     #[arg(short, long)]
     pub output: Option<PathBuf>,
     /// Keep the bake cache (MODEL.bake-cache/: sample shards and trained networks) after a
@@ -45,6 +45,10 @@ pub struct BakeArgs {
     /// and the same command started again resumes from it and writes the same model.
     #[arg(long)]
     pub keep_samples: bool,
+    /// When another bake is writing the same model, wait for it to end and then bake (resuming
+    /// from what it left), instead of exiting with an error.
+    #[arg(long)]
+    pub wait: bool,
     /// Print one line of JSON with the figures of the bake.
     #[arg(long)]
     pub json: bool,
@@ -160,6 +164,14 @@ fn report_stage(args: &BakeArgs, cache: &Path, part: Part, report: &BakeReport) 
 
 /// Ctrl-C ends the bake at once: everything finished is already in the cache (every cache
 /// file is written whole or not at all), so nothing is lost. Says how to resume.
+/// What `--wait` says while another bake holds the model.
+fn announce_wait(holder: Option<u32>) {
+    match holder {
+        Some(pid) => eprintln!("waiting for the bake of process {pid}, which is writing this model"),
+        None => eprintln!("waiting for another bake, which is writing this model"),
+    }
+}
+
 fn stop_on_ctrl_c(lock: Option<PathBuf>, cache: &Path) {
     let command: Vec<String> = std::iter::once("rrf".to_string()).chain(std::env::args().skip(1)).collect();
     let message = format!(
@@ -213,7 +225,10 @@ pub fn run(args: &BakeArgs) -> Result<()> {
     // written by one process, under the lock.
     let lock = match part {
         Part::Stage { .. } => None,
-        Part::Whole | Part::Merge => Some(BakeLock::acquire(&output)?),
+        Part::Whole | Part::Merge => {
+            let contended = if args.wait { Contended::Wait(announce_wait) } else { Contended::Refuse };
+            Some(BakeLock::acquire(&output, contended)?)
+        }
     };
     stop_on_ctrl_c(lock.as_ref().map(|l| l.path().to_path_buf()), &cache);
     let bars = Bars {

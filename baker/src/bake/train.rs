@@ -117,7 +117,7 @@ fn input_ranges(scene: &Scene, object: u32) -> ([f32; INPUTS], [f32; INPUTS]) {
 /// What `object`'s view inputs hold: the mirrored view direction where every material of the
 /// object is glossy ([`crate::scene::Material::is_glossy`]), the direction towards the viewer
 /// elsewhere.
-fn view_input(scene: &Scene, object: u32) -> ViewInput {
+pub(super) fn view_input(scene: &Scene, object: u32) -> ViewInput {
     let o = &scene.objects[object as usize];
     if o.parts.iter().all(|p| scene.materials[p.material as usize].is_glossy()) {
         ViewInput::Mirror
