@@ -141,7 +141,7 @@ fn main() {
     let adam_history = adam(&data.train, &data.validation, &initial, lr, adam_seconds);
     let adam_final = best(&adam_history);
     println!("\nadam lr {lr}: validation MSE against time");
-    for (t, e) in adam_history.iter().filter(|(t, _)| (*t as u64) % 5 == 0 && t.fract() < 0.5) {
+    for (t, e) in adam_history.iter().filter(|(t, _)| (*t as u64).is_multiple_of(5) && t.fract() < 0.5) {
         println!("  {t:>6.1} s  {e:.3e}");
     }
 

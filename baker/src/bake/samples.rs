@@ -210,7 +210,7 @@ pub const SAMPLE_BYTES: usize = 4 * (1 + INPUTS + 8);
 /// Inverse of [`encode`]; `None` if the length is not a whole number of samples or a sample
 /// names an object past `objects`.
 pub fn decode(bytes: &[u8], objects: usize) -> Option<Vec<Sample>> {
-    if bytes.len() % SAMPLE_BYTES != 0 {
+    if !bytes.len().is_multiple_of(SAMPLE_BYTES) {
         return None;
     }
     let word = |b: &[u8], i: usize| [b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]];
