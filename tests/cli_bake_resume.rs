@@ -34,10 +34,16 @@ fn start_bake(output: &Path) -> Child {
         .expect("start rrf bake")
 }
 
-/// Cache files whose names start with `prefix`.
+/// Finished cache files whose names start with `prefix`: not the temporary files
+/// (`NAME.partial-PID.bin`) that become them when whole.
 fn count(cache: &Path, prefix: &str) -> usize {
     std::fs::read_dir(cache).map_or(0, |entries| {
-        entries.filter(|e| e.as_ref().unwrap().file_name().to_string_lossy().starts_with(prefix)).count()
+        entries
+            .filter(|e| {
+                let name = e.as_ref().unwrap().file_name().to_string_lossy().into_owned();
+                name.starts_with(prefix) && !name.contains(".partial-")
+            })
+            .count()
     })
 }
 
