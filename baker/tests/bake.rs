@@ -136,6 +136,103 @@ fn bakes_too_large_to_hold_are_refused_before_any_work() {
     assert!(!cache.exists(), "nothing was written");
 }
 
+/// A model made by hand, written, and read back field by field as the safetensors format and
+/// the README describe the file (not through the model's own decoder): the length of the
+/// header, one tensor per layer named `OBJECT/COMPONENT/CUTS/LAYER` with its shape and bytes,
+/// and the `rrf` metadata with each network's record and the FNV-1a 64 checksum of the
+/// tensor data.
+#[test]
+fn a_hand_made_model_is_written_as_the_format_says() {
+    use rrf_baker::model::{Metadata, NetworkInfo, Untrained, FORMAT_VERSION, INPUT_NAMES};
+    use rrf_baker::network::{ViewInput, PARAMETERS};
+    use rrf_baker::partition::{Region, Split};
+    use serde_json::{json, Value};
+
+    let leaf = |below: bool, view: ViewInput| NetworkInfo {
+        object: "Box".into(),
+        component: Component::Indirect,
+        region: Region(vec![Split { axis: 0, at: 0.5, below }]),
+        view,
+        input_min: vec![-1.0; 13],
+        input_max: vec![1.0; 13],
+        target_transform: "scale".into(),
+        output_scale: 2.0,
+        samples: 10,
+        train_mse: 0.25,
+        val_mse: 0.5,
+        val_noise: 0.125,
+        iterations: 7,
+    };
+    let infos = [leaf(true, ViewInput::Mirror), leaf(false, ViewInput::Mirror)];
+    let params: [Vec<f32>; 2] = [0, 1].map(|k| (0..PARAMETERS).map(|i| (1000 * k + i) as f32 * 0.5).collect());
+    let model = Model {
+        metadata: Metadata {
+            format_version: FORMAT_VERSION,
+            scene: "hand-made".into(),
+            scene_hash: "0123456789abcdef".into(),
+            inputs: INPUT_NAMES.iter().map(|s| s.to_string()).collect(),
+            layers: vec![20, 10, 3],
+            activation: "tanh".into(),
+            networks: infos.to_vec(),
+            untrained: vec![Untrained { object: "Lamp".into(), samples: 3, reason: "too few samples".into() }],
+            borrowed: vec![],
+            bake: json!({ "seed": 9 }),
+            blend_band: 0.1,
+            checksum: String::new(),
+        },
+        networks: infos.iter().zip(&params).map(|(info, p)| info.network(p.clone(), 0.1).unwrap()).collect(),
+    };
+    let bytes = model.to_bytes().unwrap();
+
+    let header_len = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize;
+    let header: Value = serde_json::from_slice(&bytes[8..8 + header_len]).unwrap();
+    let data = &bytes[8 + header_len..];
+    let layers = [("w1", vec![20, 13], 0), ("b1", vec![20], 260), ("w2", vec![10, 20], 280)];
+    let layers = layers.into_iter().chain([("b2", vec![10], 480), ("w3", vec![3, 10], 490), ("b3", vec![3], 520)]);
+    for (layer, shape, offset) in layers {
+        for (cut, p) in ["x<0.5", "x>=0.5"].iter().zip(&params) {
+            let name = format!("Box/indirect/{cut}/{layer}");
+            let tensor = &header[&name];
+            assert_eq!(tensor["dtype"], "F32", "{name}");
+            assert_eq!(tensor["shape"], json!(shape), "{name}");
+            let at: Vec<usize> = serde_json::from_value(tensor["data_offsets"].clone()).unwrap();
+            let count: usize = shape.iter().product();
+            let expected: Vec<u8> = p[offset..offset + count].iter().flat_map(|v| v.to_le_bytes()).collect();
+            assert_eq!(&data[at[0]..at[1]], expected.as_slice(), "{name}");
+        }
+    }
+    let mut fnv = 0xcbf2_9ce4_8422_2325u64;
+    for byte in params.iter().flatten().flat_map(|v| v.to_le_bytes()) {
+        fnv = (fnv ^ u64::from(byte)).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    let rrf: Value = serde_json::from_str(header["__metadata__"]["rrf"].as_str().unwrap()).unwrap();
+    assert_eq!(rrf["checksum"], format!("{fnv:016x}"));
+    assert_eq!(rrf["format_version"], FORMAT_VERSION);
+    assert_eq!(
+        (&rrf["scene"], &rrf["scene_hash"], &rrf["blend_band"]),
+        (&json!("hand-made"), &json!("0123456789abcdef"), &json!(0.1))
+    );
+    assert_eq!(
+        (&rrf["layers"], &rrf["activation"], &rrf["bake"]),
+        (&json!([20, 10, 3]), &json!("tanh"), &json!({ "seed": 9 }))
+    );
+    assert_eq!(rrf["untrained"], json!([{ "object": "Lamp", "samples": 3, "reason": "too few samples" }]));
+    assert!(rrf.get("borrowed").is_none(), "no borrowed samples, no field");
+    let low = &rrf["networks"][0];
+    assert_eq!(
+        (&low["object"], &low["component"], &low["view"]),
+        (&json!("Box"), &json!("indirect"), &json!("mirror"))
+    );
+    assert_eq!(low["region"], json!([{ "axis": 0, "at": 0.5, "below": true }]));
+    assert_eq!((&low["output_scale"], &low["samples"], &low["iterations"]), (&json!(2.0), &json!(10), &json!(7)));
+    assert_eq!((&low["train_mse"], &low["val_mse"], &low["val_noise"]), (&json!(0.25), &json!(0.5), &json!(0.125)));
+    assert_eq!(low["input_min"], json!(vec![-1.0; 13]));
+
+    let read = Model::from_bytes(&bytes).unwrap();
+    assert_eq!(read.metadata, Metadata { checksum: format!("{fnv:016x}"), ..model.metadata.clone() });
+    assert_eq!(read.networks, model.networks);
+}
+
 #[test]
 fn model_round_trips_and_refuses_bad_files() {
     let scene = scene("cornell-box");
@@ -144,7 +241,10 @@ fn model_round_trips_and_refuses_bad_files() {
     let path = dir.join("model.safetensors");
     model.save(&path).unwrap();
     let loaded = Model::load(&path, Some(&scene)).unwrap();
-    assert_eq!(loaded, Model::from_bytes(&model.to_bytes().unwrap()).unwrap());
+    // The checksum is computed as the model is written.
+    assert_eq!(loaded.metadata.checksum.len(), 16);
+    let metadata = rrf_baker::model::Metadata { checksum: loaded.metadata.checksum.clone(), ..model.metadata.clone() };
+    assert_eq!(loaded.metadata, metadata);
     assert_eq!(loaded.networks, model.networks);
     let floor = loaded.networks("Floor", Component::Direct);
     assert!(!floor.is_empty(), "the floor has a direct network");
