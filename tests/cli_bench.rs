@@ -3,7 +3,10 @@
 
 mod common;
 
+use std::path::Path;
+
 use common::rrf;
+use rrf_baker::model::Model;
 
 #[test]
 fn bench_prints_the_figures() {
@@ -43,13 +46,22 @@ fn bench_prints_the_figures() {
     // falls back to them too.
     assert_eq!(bytes["tiled display"], bytes["tiled radiance"], "blended units fall back to radiance: {bytes:?}");
 
-    // A model with hard cuts (the glossy room's): the display frame writes one RGBA8 image
-    // instead of three RGBA32F ones and a tonemap.
+    // A model with hard cuts (the glossy room's, its blend band set to 0): the display frame
+    // writes one RGBA8 image instead of three RGBA32F ones and a tonemap.
+    let mut hard =
+        Model::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy-room/model.safetensors"), None).unwrap();
+    hard.metadata.blend_band = 0.0;
+    let dir = std::env::temp_dir().join(format!("rrf-bench-hard-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let hard_path = dir.join("hard.safetensors");
+    hard.save(&hard_path).unwrap();
     #[rustfmt::skip]
     let out = rrf(
-        &["bench", "scenes/glossy-room", "--size", "32x32", "--frames", "2", "--json", "--variant", "tiled"],
+        &["bench", "scenes/glossy-room", "--model", hard_path.to_str().unwrap(), "--size", "32x32", "--frames", "2",
+          "--json", "--variant", "tiled"],
         &[],
     );
+    std::fs::remove_dir_all(&dir).unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let rows: Vec<serde_json::Value> =
         String::from_utf8(out.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
