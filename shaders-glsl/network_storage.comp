@@ -43,9 +43,6 @@ void main() {
     uvec2 range = object > 0u ? object_units(object - 1u) : uvec2(0u);
     if (range.y > 0u) {
         float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
-        if (object_mirrors_view(object - 1u)) {
-            mirror_view_input(x);
-        }
         vec3 p = vec3(x[0], x[1], x[2]);
         for (uint unit = range.x; unit < range.x + range.y; ++unit) {
             float weight = unit_weight(constants.objects, unit, p);

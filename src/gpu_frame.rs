@@ -10,7 +10,7 @@ use std::cell::RefCell;
 use anyhow::Result;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
-use rrf_baker::network::{Component, Network, ViewInput};
+use rrf_baker::network::{Component, Network};
 use rrf_baker::partition::Region;
 use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
@@ -55,12 +55,7 @@ pub fn network_units<'a>(scene: &Scene, model: &'a Model, direct: Direct) -> Vec
     for (id, o) in scene.objects.iter().enumerate() {
         let indirect = model.networks(&o.name, Component::Indirect);
         if direct == Direct::Analytic {
-            let unit = |i: &&'a Network| NetworkUnit {
-                object: id,
-                mirrored_view: i.view == ViewInput::Mirror,
-                direct: whole(i),
-                indirect: weights(i),
-            };
+            let unit = |i: &&'a Network| NetworkUnit { object: id, direct: whole(i), indirect: weights(i) };
             units.extend(indirect.iter().map(unit));
             continue;
         }
@@ -81,9 +76,7 @@ pub fn network_units<'a>(scene: &Scene, model: &'a Model, direct: Direct) -> Vec
                     (weights(d), weights(i))
                 }
             };
-            // The model's networks of one object share their view input.
-            let mirrored_view = d.view == ViewInput::Mirror;
-            units.push(NetworkUnit { object: id, mirrored_view, direct: unit.0, indirect: unit.1 });
+            units.push(NetworkUnit { object: id, direct: unit.0, indirect: unit.1 });
         }
     }
     units

@@ -21,9 +21,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::atomic_file::write_atomically;
 use crate::hash::Fnv64;
-use crate::network::{
-    Component, Network, ViewInput, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3,
-};
+use crate::network::{Component, Network, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
 use crate::partition::{is_partition, Region, Split, MAX_BLEND_BAND};
 use crate::scene::Scene;
 
@@ -101,9 +99,6 @@ pub struct NetworkInfo {
     /// The kd-tree leaf the network covers; absent when it covers the whole object.
     #[serde(default, skip_serializing_if = "Region::is_whole")]
     pub region: Region,
-    /// What its view inputs hold; absent for the direction towards the viewer.
-    #[serde(default, skip_serializing_if = "ViewInput::is_viewer")]
-    pub view: ViewInput,
     pub input_min: Vec<f32>,
     pub input_max: Vec<f32>,
     /// `scale`: the network predicts radiance / `output_scale`.
@@ -133,7 +128,6 @@ impl NetworkInfo {
             component: self.component,
             region: self.region.clone(),
             blend: self.region.blend_box(corner(&self.input_min), corner(&self.input_max), blend_band),
-            view: self.view,
             input_min: std::array::from_fn(|i| self.input_min[i]),
             input_max: std::array::from_fn(|i| self.input_max[i]),
             output_scale: self.output_scale,
@@ -325,12 +319,6 @@ impl Model {
                     "the {} networks of {object}/{component} are not the leaves of one kd-tree (a gap or an overlap)",
                     regions.len()
                 ));
-            }
-        }
-        let mut views: HashMap<&str, ViewInput> = HashMap::new();
-        for info in &metadata.networks {
-            if *views.entry(&info.object).or_insert(info.view) != info.view {
-                return Err(format!("the networks of {} disagree on their view input", info.object));
             }
         }
         if format!("{:016x}", hash.0) != metadata.checksum {

@@ -62,53 +62,6 @@ pub fn raw_inputs(position: Vec3, to_viewer: Vec3, light: Vec3, normal: Vec3, ro
     ]
 }
 
-/// What a network's three view inputs (`VIEW_INPUT`) hold.
-///
-/// Light leaving a glossy surface follows the mirror direction of the viewer about the
-/// normal, not the direction to the viewer: a highlight or a reflection of the room is a
-/// smooth function of the mirror direction, and a network learns it with fewer units. Given
-/// the normal (also an input) each direction determines the other, so nothing is lost for the
-/// part of the light that does not follow the mirror direction.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ViewInput {
-    /// The direction towards the viewer.
-    #[default]
-    Viewer,
-    /// That direction mirrored about the shading normal: reflect(−v, n) = 2 (n·v) n − v.
-    Mirror,
-}
-
-impl ViewInput {
-    pub fn is_viewer(&self) -> bool {
-        *self == ViewInput::Viewer
-    }
-
-    /// `raw` ([`raw_inputs`], with the direction towards the viewer) as the network takes it.
-    pub fn apply(self, raw: &[f32; INPUTS]) -> [f32; INPUTS] {
-        let mut x = *raw;
-        if self == ViewInput::Mirror {
-            let v = Vec3::from_slice(&raw[VIEW_INPUT..VIEW_INPUT + 3]);
-            let n = Vec3::from_slice(&raw[NORMAL_INPUT..NORMAL_INPUT + 3]);
-            let mirrored = 2.0 * n.dot(v) * n - v;
-            x[VIEW_INPUT..VIEW_INPUT + 3].copy_from_slice(&mirrored.to_array());
-        }
-        x
-    }
-}
-
-/// The network's inputs for `raw` inputs: `view` applied, then each input mapped from
-/// `[input_min[i], input_max[i]]` to `[-1, 1]` ([`normalize`]).
-pub fn network_inputs(
-    raw: &[f32; INPUTS],
-    view: ViewInput,
-    input_min: &[f32; INPUTS],
-    input_max: &[f32; INPUTS],
-) -> [f32; INPUTS] {
-    let x = view.apply(raw);
-    std::array::from_fn(|i| normalize(x[i], input_min[i], input_max[i]))
-}
-
 /// One trained network with what is needed to use it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Network {
@@ -118,8 +71,6 @@ pub struct Network {
     pub region: Region,
     /// Its weight among its tree's leaves: the region, blended across its cuts.
     pub blend: BlendBox,
-    /// What its view inputs hold.
-    pub view: ViewInput,
     /// Input `i` maps `[input_min[i], input_max[i]]` to `[-1, 1]`.
     pub input_min: [f32; INPUTS],
     pub input_max: [f32; INPUTS],
@@ -141,7 +92,10 @@ pub fn normalize(x: f32, lo: f32, hi: f32) -> f32 {
 impl Network {
     /// Radiance (linear RGB) for raw inputs.
     pub fn evaluate(&self, raw: &[f32; INPUTS]) -> Vec3 {
-        let x = network_inputs(raw, self.view, &self.input_min, &self.input_max);
+        let mut x = [0.0f32; INPUTS];
+        for i in 0..INPUTS {
+            x[i] = normalize(raw[i], self.input_min[i], self.input_max[i]);
+        }
         let y = forward(&self.params, &x);
         Vec3::from(y) * self.output_scale
     }

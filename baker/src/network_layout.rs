@@ -11,8 +11,6 @@ pub const VIEW_INPUT: usize = 3;
 /// Where the light position's x, y, z sit among the inputs. The renderer sums the networks
 /// over several lights by re-evaluating only these three inputs' share of the first layer.
 pub const LIGHT_INPUT: usize = 6;
-/// Where the shading normal's x, y, z sit among the inputs.
-pub const NORMAL_INPUT: usize = 9;
 /// Units of the first hidden layer (tanh).
 pub const HIDDEN1: usize = 20;
 /// Units of the second hidden layer (tanh).
@@ -39,9 +37,6 @@ pub const MIN_REFLECTANCE: f32 = 0.01;
 /// the renderer's storage variant: the direct, then the indirect parameters, each with its input
 /// normalisation and output scale folded in.
 pub const UNIT_STRIDE: usize = 2 * PARAMETERS;
-/// Floats per object in the renderer's unit table: the index of its first unit, how many units
-/// it has, and 1 where its networks take the mirrored view direction (`network::ViewInput`).
-pub const UNIT_OBJECT: usize = 3;
 /// Floats per unit in the renderer's unit table: for its direct, then its indirect network,
 /// the blend box of its kd-tree leaf (`partition::BlendBox`): min xyz, max xyz, the bands
 /// around the min faces, then around the max faces.

@@ -144,15 +144,14 @@ fn bakes_too_large_to_hold_are_refused_before_any_work() {
 #[test]
 fn a_hand_made_model_is_written_as_the_format_says() {
     use rrf_baker::model::{Metadata, NetworkInfo, Untrained, FORMAT_VERSION, INPUT_NAMES};
-    use rrf_baker::network::{ViewInput, PARAMETERS};
+    use rrf_baker::network::PARAMETERS;
     use rrf_baker::partition::{Region, Split};
     use serde_json::{json, Value};
 
-    let leaf = |below: bool, view: ViewInput| NetworkInfo {
+    let leaf = |below: bool| NetworkInfo {
         object: "Box".into(),
         component: Component::Indirect,
         region: Region(vec![Split { axis: 0, at: 0.5, below }]),
-        view,
         input_min: vec![-1.0; 13],
         input_max: vec![1.0; 13],
         target_transform: "scale".into(),
@@ -163,7 +162,7 @@ fn a_hand_made_model_is_written_as_the_format_says() {
         val_noise: 0.125,
         iterations: 7,
     };
-    let infos = [leaf(true, ViewInput::Mirror), leaf(false, ViewInput::Mirror)];
+    let infos = [leaf(true), leaf(false)];
     let params: [Vec<f32>; 2] = [0, 1].map(|k| (0..PARAMETERS).map(|i| (1000 * k + i) as f32 * 0.5).collect());
     let model = Model {
         metadata: Metadata {
@@ -219,10 +218,7 @@ fn a_hand_made_model_is_written_as_the_format_says() {
     assert_eq!(rrf["untrained"], json!([{ "object": "Lamp", "samples": 3, "reason": "too few samples" }]));
     assert!(rrf.get("borrowed").is_none(), "no borrowed samples, no field");
     let low = &rrf["networks"][0];
-    assert_eq!(
-        (&low["object"], &low["component"], &low["view"]),
-        (&json!("Box"), &json!("indirect"), &json!("mirror"))
-    );
+    assert_eq!((&low["object"], &low["component"]), (&json!("Box"), &json!("indirect")));
     assert_eq!(low["region"], json!([{ "axis": 0, "at": 0.5, "below": true }]));
     assert_eq!((&low["output_scale"], &low["samples"], &low["iterations"]), (&json!(2.0), &json!(10), &json!(7)));
     assert_eq!((&low["train_mse"], &low["val_mse"], &low["val_noise"]), (&json!(0.25), &json!(0.5), &json!(0.125)));
@@ -413,59 +409,40 @@ fn split_depth_bounds_the_kd_tree() {
 }
 
 /// A pure Lambert surface reflects the same light towards every viewer, so its networks get
-/// the direction to the viewer as the constant 0 (an empty input range); one with a rough
-/// specular lobe sees that direction; a glossy one (roughness ≤ 0.5) sees it mirrored about
-/// the normal.
+/// the direction to the viewer as the constant 0 (an empty input range); one with a specular
+/// lobe sees it.
 #[test]
-fn view_inputs_follow_the_materials() {
+fn lambert_networks_do_not_see_the_viewpoint() {
     let mut scene = scene("cornell-box");
-    let mut restyle = |name: &str, specular: f32, roughness: f32| {
-        let object = scene.object_by_name(name).unwrap().id as usize;
-        let mut material = scene.materials[scene.objects[object].parts[0].material as usize].clone();
-        (material.specular, material.roughness) = (specular, roughness);
-        scene.materials.push(material);
-        let material = scene.materials.len() as u32 - 1;
-        scene.objects[object].parts.iter_mut().for_each(|p| p.material = material);
-    };
-    restyle("TallBlock", 1.0, 1.0);
-    restyle("ShortBlock", 1.0, 0.2);
+    let tall = scene.object_by_name("TallBlock").unwrap().id as usize;
+    let mut glossy = scene.materials[scene.objects[tall].parts[0].material as usize].clone();
+    glossy.specular = 1.0;
+    scene.materials.push(glossy);
+    let glossy = scene.materials.len() as u32 - 1;
+    scene.objects[tall].parts.iter_mut().for_each(|p| p.material = glossy);
     let mut settings = BakeSettings::new(Quality::Test, 1, &scene);
     settings.split_depth = 0;
     let (model, _) = bake(&scene, &settings, &scratch("lambert"), &Quiet).unwrap();
 
-    use rrf_baker::network::{Network, ViewInput, INPUTS, NORMAL_INPUT, VIEW_INPUT};
+    use rrf_baker::network::{Network, INPUTS, VIEW_INPUT};
     let view = VIEW_INPUT..VIEW_INPUT + 3;
-    let raw = |to_viewer: [f32; 3]| {
+    let towards = |n: &Network, to_viewer: [f32; 3]| {
         let mut raw = [0.3f32; INPUTS];
         raw[view.clone()].copy_from_slice(&to_viewer);
-        raw[NORMAL_INPUT..NORMAL_INPUT + 3].copy_from_slice(&[0.0, 1.0, 0.0]);
-        raw
+        n.evaluate(&raw)
     };
-    let towards = |n: &Network, to_viewer: [f32; 3]| n.evaluate(&raw(to_viewer));
     let (a, b) = ([0.0, 0.0, -1.0], [0.6, 0.64, -0.48]);
     for n in &model.networks {
         let (lo, hi) = (&n.input_min[view.clone()], &n.input_max[view.clone()]);
-        let what = format!("{} {:?}", n.object, n.component);
-        match n.object.as_str() {
-            "TallBlock" | "ShortBlock" => {
-                assert_eq!((lo, hi), (&[-1.0; 3][..], &[1.0; 3][..]), "{what}");
-                assert_ne!(towards(n, a), towards(n, b), "{what}");
-            }
-            _ => {
-                assert_eq!((lo, hi), (&[0.0; 3][..], &[0.0; 3][..]), "{what}");
-                assert_eq!(towards(n, a), towards(n, b), "{what}");
-            }
-        }
-        if n.object == "ShortBlock" {
-            assert_eq!(n.view, ViewInput::Mirror, "{what}");
-            // About the normal +y, b = (0.6, 0.64, -0.48) mirrors to (-0.6, 0.64, 0.48).
-            let as_viewer = Network { view: ViewInput::Viewer, ..n.clone() };
-            assert_eq!(towards(n, b), towards(&as_viewer, [-0.6, 0.64, 0.48]), "{what}");
+        if n.object == "TallBlock" {
+            assert_eq!((lo, hi), (&[-1.0; 3][..], &[1.0; 3][..]), "{} {:?}", n.object, n.component);
+            assert_ne!(towards(n, a), towards(n, b), "{} {:?}", n.object, n.component);
         } else {
-            assert_eq!(n.view, ViewInput::Viewer, "{what}");
+            assert_eq!((lo, hi), (&[0.0; 3][..], &[0.0; 3][..]), "{} {:?}", n.object, n.component);
+            assert_eq!(towards(n, a), towards(n, b), "{} {:?}", n.object, n.component);
         }
     }
-    assert!(["TallBlock", "ShortBlock"].iter().all(|o| model.networks.iter().any(|n| n.object == *o)));
+    assert!(model.networks.iter().any(|n| n.object == "TallBlock"));
 }
 
 /// Where the kd-tree cuts an object, its two leaves disagree (each learned its own half), but

@@ -37,7 +37,7 @@ use crate::sync::{Access, Pass, ResourceStates, Use};
 mod layout {
     include!("../../baker/src/network_layout.rs");
 }
-use layout::{B1, FIRST_PARAMETER_ID, HIDDEN1, UNIT_BLEND, UNIT_OBJECT, W3};
+use layout::{B1, FIRST_PARAMETER_ID, HIDDEN1, UNIT_BLEND, W3};
 pub use layout::{INPUTS, PARAMETERS, UNIT_STRIDE};
 /// The most units `network_classify.comp` tells apart.
 const MAX_UNITS: usize = 1024;
@@ -127,10 +127,6 @@ impl NetworkWeights<'_> {
 #[derive(Clone, Copy)]
 pub struct NetworkUnit<'a> {
     pub object: usize,
-    /// Whether both networks take the view direction mirrored about the normal in place of the
-    /// direction towards the viewer (the baker's `ViewInput::Mirror`); the same for all of an
-    /// object's units.
-    pub mirrored_view: bool,
     pub direct: NetworkWeights<'a>,
     pub indirect: NetworkWeights<'a>,
 }
@@ -159,30 +155,24 @@ fn ordered<'a>(objects: usize, units: &[NetworkUnit<'a>]) -> Result<Vec<NetworkU
     units.iter().try_for_each(|u| u.check(objects))?;
     let mut ordered = units.to_vec();
     ordered.sort_by_key(|u| u.object);
-    if let Some(w) = ordered.windows(2).find(|w| w[0].object == w[1].object && w[0].mirrored_view != w[1].mirrored_view)
-    {
-        return Err(Error::Invalid(format!("object {}: its network units disagree on the view input", w[0].object)));
-    }
     Ok(ordered)
 }
 
 /// The table of `network_units.glsl` for `units` (grouped by object) of `objects` object ids:
-/// per object its first unit, unit count and view input, then per unit its two leaves' blend
-/// boxes.
+/// per object its first unit and unit count, then per unit its two leaves' blend boxes.
 fn unit_table(objects: usize, units: &[NetworkUnit]) -> Vec<f32> {
-    let mut table = vec![0.0f32; UNIT_OBJECT * objects.max(1)];
+    let mut table = vec![0.0f32; 2 * objects.max(1)];
     for (index, unit) in units.iter().enumerate() {
-        let entry = &mut table[UNIT_OBJECT * unit.object..UNIT_OBJECT * (unit.object + 1)];
+        let entry = &mut table[2 * unit.object..2 * unit.object + 2];
         if entry[1] == 0.0 {
             entry[0] = index as f32;
         }
         entry[1] += 1.0;
-        entry[2] = if unit.mirrored_view { 1.0 } else { 0.0 };
     }
     for unit in units {
         table.extend(unit.direct.blend.table().chain(unit.indirect.blend.table()));
     }
-    debug_assert_eq!(table.len(), UNIT_OBJECT * objects.max(1) + UNIT_BLEND * units.len());
+    debug_assert_eq!(table.len(), 2 * objects.max(1) + UNIT_BLEND * units.len());
     table
 }
 

@@ -68,15 +68,4 @@ float[INPUTS] raw_inputs(ivec2 pixel, Shading s, vec3 eye) {
     return float[INPUTS](p.x, p.y, p.z, v.x, v.y, v.z, 0.0, 0.0, 0.0, n.x, n.y, n.z, roughness);
 }
 
-// The view inputs of `x` mirrored about its normal, for the networks of glossy objects: the
-// twin of `ViewInput::Mirror` in baker/src/network.rs.
-void mirror_view_input(inout float x[INPUTS]) {
-    vec3 v = vec3(x[VIEW_INPUT], x[VIEW_INPUT + 1], x[VIEW_INPUT + 2]);
-    vec3 n = vec3(x[NORMAL_INPUT], x[NORMAL_INPUT + 1], x[NORMAL_INPUT + 2]);
-    vec3 mirrored = 2.0 * dot(n, v) * n - v;
-    for (int i = 0; i < 3; ++i) {
-        x[VIEW_INPUT + i] = mirrored[i];
-    }
-}
-
 #endif

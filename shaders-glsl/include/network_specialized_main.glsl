@@ -104,10 +104,6 @@ void main() {
     if (weight == 0.0) {
         return;
     }
-    vec3 wo = vec3(x[VIEW_INPUT], x[VIEW_INPUT + 1], x[VIEW_INPUT + 2]);
-    if (object_mirrors_view(OBJECT - 1u)) {
-        mirror_view_input(x);
-    }
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
     if (!SEVERAL_LIGHTS) {
@@ -138,7 +134,8 @@ void main() {
     direct *= reflectance;
     indirect *= reflectance;
     if (ANALYTIC) {
-        vec3 n = vec3(x[NORMAL_INPUT], x[NORMAL_INPUT + 1], x[NORMAL_INPUT + 2]);
+        vec3 wo = vec3(x[3], x[4], x[5]);
+        vec3 n = vec3(x[9], x[10], x[11]);
         direct = analytic_direct(p, n, wo, shading, materials[id_material(id)].w);
     }
 #ifdef DISPLAY

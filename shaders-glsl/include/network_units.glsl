@@ -1,9 +1,8 @@
 // The network units: the parts of objects that each have one direct and one indirect network
 // (the whole object, or where a leaf of its direct kd-tree meets one of its indirect tree;
 // baker/src/partition.rs). network_pass.rs (`unit_table`) writes the table: per object (id - 1)
-// UNIT_OBJECT floats: the index of its first unit, how many it has (0: no networks) and 1 where
-// its networks take the mirrored view direction; then per unit UNIT_BLEND floats: the blend
-// boxes of its direct and its indirect leaf.
+// the index of its first unit and how many it has (0: no networks), then per unit
+// UNIT_BLEND floats: the blend boxes of its direct and its indirect leaf.
 //
 // Leaves blend across their cuts: a unit's weight at a point is its direct leaf's weight
 // times its indirect leaf's, and an object's units' weights sum to one, so that the pixel's
@@ -48,20 +47,14 @@ float leaf_weight(uint b, vec3 p) {
 
 // Unit `u`'s weight at `p`, in a table of `objects` object entries.
 float unit_weight(uint objects, uint u, vec3 p) {
-    uint b = UNIT_OBJECT * objects + u * UNIT_BLEND;
+    uint b = 2u * objects + u * UNIT_BLEND;
     precise float w = leaf_weight(b, p) * leaf_weight(b + UNIT_BLEND / 2u, p);
     return w;
 }
 
 // The first unit of object (id - 1) `object`, and how many it has.
 uvec2 object_units(uint object) {
-    return uvec2(units[UNIT_OBJECT * object], units[UNIT_OBJECT * object + 1u]);
-}
-
-// Whether the networks of object (id - 1) `object` take the mirrored view direction
-// (`mirror_view_input`).
-bool object_mirrors_view(uint object) {
-    return units[UNIT_OBJECT * object + 2u] != 0.0;
+    return uvec2(units[2u * object], units[2u * object + 1u]);
 }
 
 #endif

@@ -27,7 +27,7 @@ use serde::Serialize;
 
 use crate::hash::Fnv64;
 use crate::model::{Metadata, Model, NetworkInfo, Untrained, FORMAT_VERSION, INPUT_NAMES};
-use crate::network::{Component, Network, ViewInput, HIDDEN1, HIDDEN2, OUTPUTS};
+use crate::network::{Component, Network, HIDDEN1, HIDDEN2, OUTPUTS};
 use crate::scene::{Aabb, BakeOverrides, Scene};
 use crate::trace::integrator::non_finite_dropped;
 use crate::trace::sampling::mix64;
@@ -535,11 +535,6 @@ pub fn bake_part(
             let mut key = cache_key(scene, &settings_key);
             key.write(&[component as u8]);
             key.write(&object.to_le_bytes());
-            // Checkpoints from before glossy objects' networks took the mirrored view stay
-            // valid for the others.
-            if train::view_input(scene, object) == ViewInput::Mirror {
-                key.write(b"mirror");
-            }
             let path = cache.join(format!("network-{object:05}-{}.bin", component.name()));
             let checkpoint: Option<Vec<(Network, NetworkInfo)>> =
                 cache::read(&path, NETWORK_MAGIC, key.0, &corrupt, |bytes| {

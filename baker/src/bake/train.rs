@@ -10,7 +10,7 @@ use super::samples::Sample;
 use super::BakeSettings;
 use crate::hash::Fnv64;
 use crate::model::NetworkInfo;
-use crate::network::{network_inputs, Component, Network, ViewInput, INPUTS, OUTPUTS, VIEW_INPUT, W3};
+use crate::network::{normalize, Component, Network, INPUTS, OUTPUTS, VIEW_INPUT, W3};
 use crate::partition::Region;
 use crate::scene::{Aabb, Scene};
 use crate::trace::sampling::{mix64, Rng};
@@ -114,23 +114,10 @@ fn input_ranges(scene: &Scene, object: u32) -> ([f32; INPUTS], [f32; INPUTS]) {
     (lo, hi)
 }
 
-/// What `object`'s view inputs hold: the mirrored view direction where every material of the
-/// object is glossy ([`crate::scene::Material::is_glossy`]), the direction towards the viewer
-/// elsewhere.
-pub(super) fn view_input(scene: &Scene, object: u32) -> ViewInput {
-    let o = &scene.objects[object as usize];
-    if o.parts.iter().all(|p| scene.materials[p.material as usize].is_glossy()) {
-        ViewInput::Mirror
-    } else {
-        ViewInput::Viewer
-    }
-}
-
 /// The training and validation sets of one network, normalised as the model records it.
 pub struct NetworkData {
     pub train: Dataset,
     pub validation: Dataset,
-    pub view: ViewInput,
     pub input_min: [f32; INPUTS],
     pub input_max: [f32; INPUTS],
     /// Targets are divided by this (their RMS).
@@ -154,7 +141,6 @@ pub fn network_data(
     Rng::new(settings.seed ^ node.stream(), 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
     order.truncate(settings.max_samples_per_network);
     let (input_min, input_max) = input_ranges(scene, object);
-    let view = view_input(scene, object);
     let target = |s: &Sample| s.target(component);
     let rms = {
         let sum: f64 = order.iter().flat_map(|&i| target(samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
@@ -171,11 +157,11 @@ pub fn network_data(
         } else {
             &mut train
         };
-        set.inputs.push(network_inputs(&s.inputs, view, &input_min, &input_max));
+        set.inputs.push(std::array::from_fn(|k| normalize(s.inputs[k], input_min[k], input_max[k])));
         set.targets.push(target(s).map(|v| v / rms));
     }
     let validation_noise = noise / validation.len().max(1) as f64 / (f64::from(rms) * f64::from(rms));
-    NetworkData { train, validation, view, input_min, input_max, output_scale: rms, validation_noise }
+    NetworkData { train, validation, input_min, input_max, output_scale: rms, validation_noise }
 }
 
 /// `object`'s networks of `component` from its `samples`: one, or one per leaf of its kd-tree,
@@ -239,7 +225,8 @@ fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInf
                 .sum();
             let rest = Vec3::from(s.target(tree.component)) - others;
             let set = if n < validation_count { &mut validation } else { &mut train };
-            set.inputs.push(network_inputs(&s.inputs, network.view, &network.input_min, &network.input_max));
+            set.inputs
+                .push(std::array::from_fn(|k| normalize(s.inputs[k], network.input_min[k], network.input_max[k])));
             set.targets.push((rest / rms).to_array());
             set.gains.push(weight);
         }
@@ -340,7 +327,7 @@ fn position(s: &Sample) -> Vec3 {
 /// elsewhere stays near the parent, which learned from all of the object's samples.
 fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&Network>) -> Trained {
     let Tree { scene, settings, object, component } = tree;
-    let NetworkData { train, validation, view, input_min, input_max, output_scale: rms, validation_noise } =
+    let NetworkData { train, validation, input_min, input_max, output_scale: rms, validation_noise } =
         network_data(scene, settings, object, component, node, samples);
     let initial = match parent {
         Some(parent) => {
@@ -364,7 +351,6 @@ fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&N
         object: scene.objects[object as usize].name.clone(),
         component,
         region: node.region.clone(),
-        view,
         input_min: input_min.to_vec(),
         input_max: input_max.to_vec(),
         target_transform: "scale".into(),

@@ -138,6 +138,9 @@ mod tests {
     use super::*;
     use crate::scene::BakeOverrides;
 
+    /// A change to a scene, and what it changes.
+    type Change = (&'static str, fn(&mut Scene));
+
     /// Each change to what shapes a path-traced image or eval's held-out configurations
     /// changes both hashes; a change to a bake preset (what shapes only the samples) changes
     /// the content hash alone. The gallery has textures, a normal map, alpha masks, a textured emitter and a
@@ -147,7 +150,7 @@ mod tests {
         let scene = Scene::load(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/gallery")).unwrap();
         let before = content_hashes(&scene);
         assert_eq!(before, (scene.content_hash, scene.light_transport_hash));
-        let light_transport: [(&str, fn(&mut Scene)); 13] = [
+        let light_transport: [Change; 13] = [
             ("a vertex", |s| s.objects[0].positions[0].x += 1e-3),
             ("a normal", |s| s.objects[0].normals[0].y = -s.objects[0].normals[0].y),
             ("a texture coordinate", |s| s.objects[0].uvs[0].x += 0.5),
@@ -173,7 +176,7 @@ mod tests {
             assert_ne!(before.0, after.0, "{what}: content hash");
             assert_ne!(before.1, after.1, "{what}: light-transport hash");
         }
-        let samples_only: [(&str, fn(&mut Scene)); 1] =
+        let samples_only: [Change; 1] =
             [("a bake preset", |s| s.bake.final_ = Some(BakeOverrides { split_depth: Some(1), ..Default::default() }))];
         for (what, change) in samples_only {
             let mut changed = scene.clone();

@@ -40,11 +40,6 @@ pub const MAX_COORDINATE: f32 = 1.0e6;
 /// overflow f32.
 pub const MAX_EMISSION: f32 = 1e9;
 
-/// The largest roughness factor of a glossy material (`Material::is_glossy`), whose networks
-/// take the mirrored view direction. glTF's roughness squared is GGX's α, so 0.5 is a lobe of
-/// α = 0.25; the shipped scenes' glossy materials range from 0.1 (the mirror) to 0.4.
-pub const GLOSSY_ROUGHNESS: f32 = 0.5;
-
 /// File names looked for in a scene folder.
 pub const GLTF_NAMES: [&str; 2] = ["scene.gltf", "scene.glb"];
 
@@ -191,13 +186,6 @@ impl Material {
     /// (`Bsdf::is_lambert`, the same test on one shading point's values).
     pub fn is_lambert(&self) -> bool {
         self.specular == 0.0 && self.metallic == 0.0
-    }
-
-    /// Whether every point of the material has a glossy specular lobe: a roughness factor of at
-    /// most [`GLOSSY_ROUGHNESS`] (a roughness texture only scales it) and a lobe (metallic, or
-    /// a dielectric `KHR_materials_specular` factor above 0).
-    pub fn is_glossy(&self) -> bool {
-        self.roughness <= GLOSSY_ROUGHNESS && !self.is_lambert()
     }
 
     /// Its base colour, metallic-roughness, normal and emissive textures, in that order (the
