@@ -162,8 +162,6 @@ fn report_stage(args: &BakeArgs, cache: &Path, part: Part, report: &BakeReport) 
     Ok(())
 }
 
-/// Ctrl-C ends the bake at once: everything finished is already in the cache (every cache
-/// file is written whole or not at all), so nothing is lost. Says how to resume.
 /// What `--wait` says while another bake holds the model.
 fn announce_wait(holder: Option<u32>) {
     match holder {
@@ -172,6 +170,8 @@ fn announce_wait(holder: Option<u32>) {
     }
 }
 
+/// Ctrl-C ends the bake at once: everything finished is already in the cache (every cache
+/// file is written whole or not at all), so nothing is lost. Says how to resume.
 fn stop_on_ctrl_c(lock: Option<PathBuf>, cache: &Path) {
     let command: Vec<String> = std::iter::once("rrf".to_string()).chain(std::env::args().skip(1)).collect();
     let message = format!(
