@@ -1,7 +1,7 @@
 //! Levenberg–Marquardt against Adam on one object's real training samples: the Cornell box
 //! floor's direct light (shadows of both blocks), sampled with the preview preset and cut
-//! to the final preset's 12,000 samples. Prints the validation error against time for both,
-//! one thread each.
+//! to the final preset's 12,000 samples. Prints the validation error against time for both:
+//! Adam on one thread, LM on rayon's pool as in a bake (`RAYON_NUM_THREADS=1` for one).
 //!
 //! Adam: mini-batches of 1024, β = (0.9, 0.999); the learning rate is picked from a sweep of
 //! short runs, then run for 60 s. The question: how much sooner does LM reach Adam's

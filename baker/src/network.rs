@@ -113,18 +113,25 @@ pub fn evaluate_blended(leaves: &[&Network], raw: &[f32; INPUTS]) -> Vec3 {
         .sum()
 }
 
-/// The float types the network runs in: f32 for inference, f64 for training.
-pub trait Real: Copy + Default + std::ops::Mul<Output = Self> + std::ops::AddAssign {
+/// The float types the network runs in: f32 for inference and training, f64 where a test
+/// needs the precision (finite differences).
+pub trait Real: Copy + std::ops::Mul<Output = Self> + std::ops::Sub<Output = Self> + std::ops::AddAssign {
+    const ZERO: Self;
+    const ONE: Self;
     fn tanh(self) -> Self;
 }
 
 impl Real for f32 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
     fn tanh(self) -> Self {
         f32::tanh(self)
     }
 }
 
 impl Real for f64 {
+    const ZERO: Self = 0.0;
+    const ONE: Self = 1.0;
     fn tanh(self) -> Self {
         f64::tanh(self)
     }
@@ -132,7 +139,7 @@ impl Real for f64 {
 
 /// The two tanh layers on normalised inputs.
 pub fn hidden_layers<T: Real>(p: &[T], x: &[T; INPUTS]) -> ([T; HIDDEN1], [T; HIDDEN2]) {
-    let mut h1 = [T::default(); HIDDEN1];
+    let mut h1 = [T::ZERO; HIDDEN1];
     for j in 0..HIDDEN1 {
         let mut s = p[B1 + j];
         for i in 0..INPUTS {
@@ -140,7 +147,7 @@ pub fn hidden_layers<T: Real>(p: &[T], x: &[T; INPUTS]) -> ([T; HIDDEN1], [T; HI
         }
         h1[j] = s.tanh();
     }
-    let mut h2 = [T::default(); HIDDEN2];
+    let mut h2 = [T::ZERO; HIDDEN2];
     for k in 0..HIDDEN2 {
         let mut s = p[B2 + k];
         for j in 0..HIDDEN1 {
@@ -166,54 +173,38 @@ pub fn forward(p: &[f32], x: &[f32; INPUTS]) -> [f32; OUTPUTS] {
 }
 
 /// The network and its Jacobian: `jacobian[c]` is ∂y_c/∂params (length [`PARAMETERS`]).
-/// In f64, because Levenberg–Marquardt accumulates JᵀJ from it.
-pub fn forward_with_jacobian(
-    p: &[f64],
-    x: &[f64; INPUTS],
-    jacobian: &mut [[f64; PARAMETERS]; OUTPUTS],
-) -> [f64; OUTPUTS] {
-    let mut h1 = [0.0f64; HIDDEN1];
-    for j in 0..HIDDEN1 {
-        let mut s = p[B1 + j];
-        for i in 0..INPUTS {
-            s += p[W1 + j * INPUTS + i] * x[i];
-        }
-        h1[j] = s.tanh();
-    }
-    let mut h2 = [0.0f64; HIDDEN2];
-    for k in 0..HIDDEN2 {
-        let mut s = p[B2 + k];
-        for j in 0..HIDDEN1 {
-            s += p[W2 + k * HIDDEN1 + j] * h1[j];
-        }
-        h2[k] = s.tanh();
-    }
-    let mut y = [0.0f64; OUTPUTS];
+pub fn forward_with_jacobian<T: Real>(
+    p: &[T],
+    x: &[T; INPUTS],
+    jacobian: &mut [[T; PARAMETERS]; OUTPUTS],
+) -> [T; OUTPUTS] {
+    let (h1, h2) = hidden_layers(p, x);
+    let mut y = [T::ZERO; OUTPUTS];
     for c in 0..OUTPUTS {
         let g = &mut jacobian[c];
-        g.fill(0.0);
+        g.fill(T::ZERO);
         let mut s = p[B3 + c];
         for k in 0..HIDDEN2 {
             s += p[W3 + c * HIDDEN2 + k] * h2[k];
             g[W3 + c * HIDDEN2 + k] = h2[k];
         }
-        g[B3 + c] = 1.0;
+        g[B3 + c] = T::ONE;
         y[c] = s;
         // Back through layer 2 and layer 1.
-        let mut d2 = [0.0f64; HIDDEN2];
+        let mut d2 = [T::ZERO; HIDDEN2];
         for k in 0..HIDDEN2 {
-            d2[k] = p[W3 + c * HIDDEN2 + k] * (1.0 - h2[k] * h2[k]);
+            d2[k] = p[W3 + c * HIDDEN2 + k] * (T::ONE - h2[k] * h2[k]);
             g[B2 + k] = d2[k];
             for j in 0..HIDDEN1 {
                 g[W2 + k * HIDDEN1 + j] = d2[k] * h1[j];
             }
         }
         for j in 0..HIDDEN1 {
-            let mut d1 = 0.0;
+            let mut d1 = T::ZERO;
             for k in 0..HIDDEN2 {
                 d1 += p[W2 + k * HIDDEN1 + j] * d2[k];
             }
-            d1 *= 1.0 - h1[j] * h1[j];
+            d1 = d1 * (T::ONE - h1[j] * h1[j]);
             g[B1 + j] = d1;
             for i in 0..INPUTS {
                 g[W1 + j * INPUTS + i] = d1 * x[i];

@@ -8,12 +8,14 @@
 //! The parameters with the lowest error on the held-out validation set are kept; training
 //! stops when that error has not improved for `patience` iterations.
 
+use std::ops::Range;
 use std::time::Instant;
 
 use faer::linalg::matmul::matmul;
 use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::solvers::Solve;
 use faer::{Accum, Mat, Par, Side};
+use rayon::prelude::*;
 
 use crate::network::{
     forward, forward_with_jacobian, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3,
@@ -75,12 +77,21 @@ pub struct LmResult {
     pub train_mse: f64,
     pub val_mse: f64,
     pub iterations: u32,
+    /// Whether training stopped because the validation error stopped improving (or no step
+    /// could lower the training error), not because it ran out of iterations: more
+    /// iterations would not help.
+    pub converged: bool,
     /// (seconds since start, validation MSE) after each iteration.
     pub history: Vec<(f64, f64)>,
 }
 
-/// Rows of the Jacobian per chunk.
+/// Samples per chunk of Jacobian rows: a chunk's Jᵀ (523 × 768 f32) stays in the cache.
 const CHUNK_SAMPLES: usize = 256;
+
+/// Samples per group: each group's share of JᵀJ is summed in f32, chunk by chunk, and the
+/// groups' shares in f64, in order, so that the sum is the same whichever threads computed
+/// the groups.
+const GROUP_SAMPLES: usize = 2048;
 
 /// Nguyen–Widrow initialisation of the two tanh layers; a small random output layer whose
 /// bias starts at the mean target.
@@ -108,27 +119,47 @@ pub fn initial_parameters(seed: u64, mean_target: [f32; OUTPUTS]) -> Vec<f32> {
     p
 }
 
-/// JᵀJ, Jᵀe and the training MSE at `params`, accumulated chunk by chunk.
-fn normal_equations(train: &Dataset, params: &[f64]) -> (Mat<f64>, Mat<f64>, f64) {
+/// JᵀJ (its lower triangle) and Jᵀe at `params`.
+///
+/// The products of the Jacobian's rows, most of an iteration's time, are in f32 (twice the
+/// SIMD width of f64) over at most [`GROUP_SAMPLES`] samples; the groups are summed, and the
+/// step solved, in f64. Groups run in parallel, so the last network of a bake still trains on
+/// every core.
+fn normal_equations(train: &Dataset, params: &[f32]) -> (Mat<f64>, Mat<f64>) {
+    let groups: Vec<(Mat<f32>, Mat<f32>)> = (0..train.len().div_ceil(GROUP_SAMPLES))
+        .into_par_iter()
+        .map(|g| group_normal_equations(train, params, g * GROUP_SAMPLES..((g + 1) * GROUP_SAMPLES).min(train.len())))
+        .collect();
     let mut jtj = Mat::<f64>::zeros(PARAMETERS, PARAMETERS);
     let mut jte = Mat::<f64>::zeros(PARAMETERS, 1);
+    for (group_jtj, group_jte) in &groups {
+        for j in 0..PARAMETERS {
+            for i in j..PARAMETERS {
+                jtj[(i, j)] += f64::from(group_jtj[(i, j)]);
+            }
+            jte[(j, 0)] += f64::from(group_jte[(j, 0)]);
+        }
+    }
+    (jtj, jte)
+}
+
+/// One group's share of [`normal_equations`], in f32.
+fn group_normal_equations(train: &Dataset, params: &[f32], samples: Range<usize>) -> (Mat<f32>, Mat<f32>) {
+    let mut jtj = Mat::<f32>::zeros(PARAMETERS, PARAMETERS);
+    let mut jte = Mat::<f32>::zeros(PARAMETERS, 1);
     // Jᵀ of one chunk, column per residual, so that each Jacobian row is written contiguously.
-    let mut jt = Mat::<f64>::zeros(PARAMETERS, CHUNK_SAMPLES * OUTPUTS);
-    let mut e = Mat::<f64>::zeros(CHUNK_SAMPLES * OUTPUTS, 1);
-    let mut grads = Box::new([[0.0f64; PARAMETERS]; OUTPUTS]);
-    let mut sse = 0.0;
-    for start in (0..train.len()).step_by(CHUNK_SAMPLES) {
-        let end = (start + CHUNK_SAMPLES).min(train.len());
+    let mut jt = Mat::<f32>::zeros(PARAMETERS, CHUNK_SAMPLES * OUTPUTS);
+    let mut e = Mat::<f32>::zeros(CHUNK_SAMPLES * OUTPUTS, 1);
+    let mut grads = Box::new([[0.0f32; PARAMETERS]; OUTPUTS]);
+    for start in samples.clone().step_by(CHUNK_SAMPLES) {
+        let end = (start + CHUNK_SAMPLES).min(samples.end);
         let rows = (end - start) * OUTPUTS;
         for (n, s) in (start..end).enumerate() {
-            let x: [f64; INPUTS] = train.inputs[s].map(f64::from);
-            let y = forward_with_jacobian(params, &x, &mut grads);
-            let gain = f64::from(train.gain(s));
+            let y = forward_with_jacobian(params, &train.inputs[s], &mut grads);
+            let gain = train.gain(s);
             for c in 0..OUTPUTS {
                 let col = n * OUTPUTS + c;
-                let residual = gain * y[c] - f64::from(train.targets[s][c]);
-                e[(col, 0)] = residual;
-                sse += residual * residual;
+                e[(col, 0)] = gain * y[c] - train.targets[s][c];
                 let column = jt.col_mut(col).try_as_col_major_mut().expect("contiguous column").as_slice_mut();
                 column.iter_mut().zip(&grads[c]).for_each(|(j, g)| *j = gain * g);
             }
@@ -148,7 +179,7 @@ fn normal_equations(train: &Dataset, params: &[f64]) -> (Mat<f64>, Mat<f64>, f64
         );
         matmul(jte.as_mut(), Accum::Add, jt_chunk, e.as_ref().subrows(0, rows), 1.0, Par::Seq);
     }
-    (jtj, jte, sse / (train.len() * OUTPUTS).max(1) as f64)
+    (jtj, jte)
 }
 
 /// The damping past which Levenberg–Marquardt gives up: the step is then a vanishing
@@ -157,28 +188,33 @@ const LAMBDA_MAX: f64 = 1e10;
 
 pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings: &LmSettings) -> LmResult {
     let start = Instant::now();
-    let to_f32 = |p: &[f64]| p.iter().map(|&v| v as f32).collect::<Vec<f32>>();
-    let mut params: Vec<f64> = initial.iter().map(|&v| f64::from(v)).collect();
-    let mut best = initial.clone();
+    let mut params = initial.clone();
+    let mut best = initial;
     let mut best_val = validation.mse(&best);
     let mut lambda = 1e-2;
     let mut since_best = 0;
     let mut history = Vec::new();
     let mut iterations = 0;
-    'outer: while iterations < settings.max_iterations && since_best < settings.patience {
+    let mut converged = false;
+    'outer: while iterations < settings.max_iterations {
+        if since_best >= settings.patience {
+            converged = true;
+            break;
+        }
         iterations += 1;
-        let (jtj, jte, _) = normal_equations(train, &params);
+        let (jtj, jte) = normal_equations(train, &params);
         // Non-finite samples make non-finite normal equations: no step can be trusted, so
         // training stops with the best parameters so far.
         let finite = |m: &Mat<f64>| (0..m.nrows()).all(|i| (0..m.ncols()).all(|j| m[(i, j)].is_finite()));
         if !finite(&jtj) || !finite(&jte) {
+            converged = true;
             break;
         }
-        // Steps are accepted on the loss of the f32 network that is kept, in one precision.
-        let loss = train.mse(&to_f32(&params));
+        let loss = train.mse(&params);
         loop {
             // Every retry raises λ; past the limit no step helps and training stops.
             if lambda > LAMBDA_MAX {
+                converged = true;
                 break 'outer;
             }
             let mut a = jtj.clone();
@@ -190,8 +226,9 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
                 continue;
             };
             let step = llt.solve(jte.as_ref());
-            let candidate: Vec<f64> = params.iter().enumerate().map(|(i, p)| p - step[(i, 0)]).collect();
-            let candidate_loss = train.mse(&to_f32(&candidate));
+            let candidate: Vec<f32> =
+                params.iter().enumerate().map(|(i, &p)| (f64::from(p) - step[(i, 0)]) as f32).collect();
+            let candidate_loss = train.mse(&candidate);
             if candidate_loss.is_finite() && candidate_loss < loss {
                 params = candidate;
                 lambda = (lambda / 10.0).max(1e-9);
@@ -199,16 +236,15 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
             }
             lambda *= 10.0;
         }
-        let current = to_f32(&params);
-        let val = validation.mse(&current);
+        let val = validation.mse(&params);
         history.push((start.elapsed().as_secs_f64(), val));
         if val < best_val * (1.0 - 1e-4) {
             best_val = val;
-            best = current;
+            best = params.clone();
             since_best = 0;
         } else {
             since_best += 1;
         }
     }
-    LmResult { train_mse: train.mse(&best), val_mse: best_val, params: best, iterations, history }
+    LmResult { train_mse: train.mse(&best), val_mse: best_val, params: best, iterations, converged, history }
 }

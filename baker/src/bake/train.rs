@@ -261,13 +261,55 @@ struct Tree<'a> {
     component: Component,
 }
 
-/// A trained network, its record, and what of its validation error is its own (above its
-/// targets' noise), relative to the mean square of its targets: what decides a split.
+/// A trained network, its record, what of its validation error is its own (above its
+/// targets' noise), relative to the mean square of its targets (what decides a split), and the
+/// data it learned from, to train it further if it becomes a leaf.
 struct Trained {
     network: Network,
     info: NetworkInfo,
     excess: f64,
+    data: NetworkData,
+    converged: bool,
 }
+
+/// Iterations of a network that may still be split: a share of the bake's `max_iterations`.
+/// It only decides the split and starts its halves, which train on from it; a node that is
+/// not split trains on to the full count ([`finish`]). On the Cornell box's depth-3 trees,
+/// training the inner nodes to the full count was more than half of a bake's training time.
+fn inner_iterations(settings: &BakeSettings) -> u32 {
+    settings.max_iterations.div_ceil(4)
+}
+
+/// The iterations `node`'s network gets before the split is decided: all of them where it
+/// cannot be split.
+fn budget(settings: &BakeSettings, node: &Node) -> u32 {
+    if node.region.0.len() as u32 >= settings.split_depth {
+        settings.max_iterations
+    } else {
+        inner_iterations(settings)
+    }
+}
+
+/// `trained` as a leaf: trained on, from where it is, to the bake's `max_iterations` in all,
+/// unless it has already converged.
+fn finish(tree: Tree, trained: Trained) -> (Network, NetworkInfo) {
+    let Trained { mut network, mut info, data, converged, .. } = trained;
+    let left = tree.settings.max_iterations.saturating_sub(info.iterations);
+    if converged || left == 0 {
+        return (network, info);
+    }
+    let settings = LmSettings { max_iterations: left, patience: PATIENCE };
+    let result = lm::train(&data.train, &data.validation, network.params.clone(), &settings);
+    let scale2 = f64::from(data.output_scale) * f64::from(data.output_scale);
+    network.params = result.params;
+    info.train_mse = result.train_mse * scale2;
+    info.val_mse = result.val_mse * scale2;
+    info.iterations += result.iterations;
+    (network, info)
+}
+
+/// A network's training stops after this many iterations without a better validation error.
+const PATIENCE: u32 = 10;
 
 /// The leaves under `node`, whose network is `trained`: the node itself, or its two halves,
 /// each grown in turn. A node is split while the tree may grow, its network's error is above
@@ -276,7 +318,7 @@ struct Trained {
 fn grow(tree: Tree, node: Node, samples: &[&Sample], trained: Trained) -> Vec<(Network, NetworkInfo)> {
     let depth = node.region.0.len() as u32;
     if depth >= tree.settings.split_depth || trained.excess <= 0.0 {
-        return vec![(trained.network, trained.info)];
+        return vec![finish(tree, trained)];
     }
     let halves = node.children().map(|child| {
         let b = child.sample_box();
@@ -284,7 +326,7 @@ fn grow(tree: Tree, node: Node, samples: &[&Sample], trained: Trained) -> Vec<(N
         (child, inside)
     });
     if halves.iter().any(|(_, inside)| inside.len() < tree.settings.min_samples) {
-        return vec![(trained.network, trained.info)];
+        return vec![finish(tree, trained)];
     }
     let [(low, low_samples), (high, high_samples)] = halves;
     let half = |node: &Node, samples: &[&Sample]| train_network(tree, node, samples, Some(&trained.network));
@@ -295,7 +337,7 @@ fn grow(tree: Tree, node: Node, samples: &[&Sample], trained: Trained) -> Vec<(N
     let shared = samples.iter().filter(|s| low_box.contains(position(s)) && high_box.contains(position(s)));
     let seam = disagreement(&low_trained.network, &high_trained.network, shared, trained.network.output_scale);
     if seam > MAX_SEAM {
-        return vec![(trained.network, trained.info)];
+        return vec![finish(tree, trained)];
     }
     let (mut leaves, high) =
         rayon::join(|| grow(tree, low, &low_samples, low_trained), || grow(tree, high, &high_samples, high_trained));
@@ -319,7 +361,7 @@ fn position(s: &Sample) -> Vec3 {
     Vec3::new(s.inputs[0], s.inputs[1], s.inputs[2])
 }
 
-/// One network on `node`'s samples.
+/// One network on `node`'s samples, for [`budget`] iterations.
 ///
 /// A half of a split starts from its `parent`'s network (the same input ranges, the output
 /// rescaled to its own targets), so that Levenberg–Marquardt, which keeps the parameters with
@@ -327,8 +369,8 @@ fn position(s: &Sample) -> Vec3 {
 /// elsewhere stays near the parent, which learned from all of the object's samples.
 fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&Network>) -> Trained {
     let Tree { scene, settings, object, component } = tree;
-    let NetworkData { train, validation, input_min, input_max, output_scale: rms, validation_noise } =
-        network_data(scene, settings, object, component, node, samples);
+    let data = network_data(scene, settings, object, component, node, samples);
+    let rms = data.output_scale;
     let initial = match parent {
         Some(parent) => {
             let mut p = parent.params.clone();
@@ -337,31 +379,31 @@ fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&N
         }
         None => {
             let mut mean = [0.0f32; OUTPUTS];
-            for t in &train.targets {
-                (0..OUTPUTS).for_each(|c| mean[c] += t[c] / train.len() as f32);
+            for t in &data.train.targets {
+                (0..OUTPUTS).for_each(|c| mean[c] += t[c] / data.train.len() as f32);
             }
             initial_parameters(mix64(settings.seed ^ (u64::from(object) << 8) ^ component as u64), mean)
         }
     };
-    let result =
-        lm::train(&train, &validation, initial, &LmSettings { max_iterations: settings.max_iterations, patience: 10 });
+    let lm_settings = LmSettings { max_iterations: budget(settings, node), patience: PATIENCE };
+    let result = lm::train(&data.train, &data.validation, initial, &lm_settings);
     // Errors in radiance units.
     let scale2 = f64::from(rms) * f64::from(rms);
     let info = NetworkInfo {
         object: scene.objects[object as usize].name.clone(),
         component,
         region: node.region.clone(),
-        input_min: input_min.to_vec(),
-        input_max: input_max.to_vec(),
+        input_min: data.input_min.to_vec(),
+        input_max: data.input_max.to_vec(),
         target_transform: "scale".into(),
         output_scale: rms,
-        samples: train.len() + validation.len(),
+        samples: data.train.len() + data.validation.len(),
         train_mse: result.train_mse * scale2,
         val_mse: result.val_mse * scale2,
-        val_noise: validation_noise * scale2,
+        val_noise: data.validation_noise * scale2,
         iterations: result.iterations,
     };
     let network =
         info.network(result.params, settings.blend_band).expect("13 input ranges and one network's parameters");
-    Trained { network, info, excess: result.val_mse - validation_noise }
+    Trained { network, info, excess: result.val_mse - data.validation_noise, data, converged: result.converged }
 }
