@@ -462,6 +462,22 @@ fn normal_map_tilts_the_shading_normal() {
     }
 }
 
+/// The emitter's 2×2 texels in linear values, rows of increasing v: red, blue; green, white
+/// (its sRGB bytes are 0 and 255, which decode to exactly 0 and 1).
+const LINEAR_TEXELS: [[[f32; 3]; 2]; 2] = [[[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]], [[0.0, 1.0, 0.0], [1.0, 1.0, 1.0]]];
+
+/// Bilinear filtering of a 2×2 texture that repeats, as glTF's default sampler has it: texel
+/// centres at 1/4 and 3/4, and past them a blend with the texel on the other side.
+fn bilinear(texels: &[[[f32; 3]; 2]; 2], uv: Vec2) -> Vec3 {
+    let p = uv * 2.0 - 0.5;
+    let (x0, y0) = (p.x.floor(), p.y.floor());
+    let (fx, fy) = (p.x - x0, p.y - y0);
+    let at = |x: f32, y: f32| Vec3::from(texels[(y as i64).rem_euclid(2) as usize][(x as i64).rem_euclid(2) as usize]);
+    let top = at(x0, y0) * (1.0 - fx) + at(x0 + 1.0, y0) * fx;
+    let bottom = at(x0, y0 + 1.0) * (1.0 - fx) + at(x0 + 1.0, y0 + 1.0) * fx;
+    top * (1.0 - fy) + bottom * fy
+}
+
 /// A square light with an emissive texture over a Lambert plane: L = ρ/π ∫ Le(y) cos θx
 /// cos θy / r² dA, by quadrature over the square. Light sampling picks triangles by textured
 /// power and the BSDF-sampled hits see the texture, so both strategies and MIS must agree.
@@ -492,8 +508,9 @@ fn textured_emitter_over_a_plane() {
         for j in 0..n {
             for k in 0..n {
                 let y = Vec3::new(-half + (j as f32 + 0.5) * cell, h, -half + (k as f32 + 0.5) * cell);
-                let uv = transform.apply(Vec2::new(y.x, y.z));
-                let emitted = le * s.textures[0].sample(uv).truncate();
+                // The square's UVs are its (x, z); the transform maps [-half, half]² to [0, 1]².
+                let uv = Vec2::new(0.5 + 0.5 * y.x / half, 0.5 + 0.5 * y.z / half);
+                let emitted = le * bilinear(&LINEAR_TEXELS, uv);
                 let d = y - *x;
                 let cos = h / d.length();
                 irradiance += emitted * cos * cos / d.length_squared() * cell * cell;
