@@ -1,5 +1,6 @@
 //! Several lights end to end: a frame lit by two coloured copies of the Cornell box's ceiling
-//! light, from the shipped networks on the GPU, against the path-traced two-light reference.
+//! light, from the shipped networks on the GPU, against the path-traced two-light reference;
+//! and frames lit by `MAX_LIGHTS` lights against the sums of their one-light frames.
 //!
 //! Per pixel, the two-light frame's direct and indirect light are the sums of the one-light
 //! frames' (a second light 5% too bright fails, tried). Its error must also stay within that
@@ -16,6 +17,7 @@ use std::path::Path;
 use common::{finish_clean, gpu};
 use rrf::eval::metrics::{compare, Metrics};
 use rrf::gpu_frame::{rgb, Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
+use rrf::lights::MAX_LIGHTS;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::scene::{PlacedLight, Scene};
@@ -50,7 +52,7 @@ fn two_lights_match_the_path_traced_two_light_reference() {
         .collect();
     frame.destroy(&ctx);
     finish_clean(ctx);
-    sums_of_one_light_frames(&frames);
+    sums_of_one_light_frames(&frames[..2], &frames[2]);
     let predicted: Vec<&Vec<Vec3>> = frames.iter().map(|f| &f[0]).collect();
 
     let geometry = Geometry::new(&scene);
@@ -91,24 +93,72 @@ fn two_lights_match_the_path_traced_two_light_reference() {
     assert!(both.1.flip <= 1.5 * worst_flip, "two lights: FLIP {} vs one light's {worst_flip}", both.1.flip);
 }
 
-/// The networks' light is linear in the lights: per pixel, the two-light frame's direct and
-/// indirect light are the sums of the one-light frames' (`frames`: gi, direct, indirect of
-/// the warm, the cool and both lights), up to float rounding, except where a light's own
-/// geometry shows in some frame (it hides what is behind it). A second light summed with the
-/// wrong scale or position fails here, however small its share of the mean error.
-fn sums_of_one_light_frames(frames: &[[Vec<Vec3>; 3]]) {
+/// The networks' light is linear in the lights: per pixel, the direct and indirect light of
+/// the frame lit by all the lights (`all`: gi, direct, indirect) are the sums of those of the
+/// frames lit by one light each (`singles`), up to float rounding, except where a light's own
+/// geometry shows in some frame (it hides what is behind it). A light summed with the wrong
+/// scale or position fails here, however small its share of the mean error.
+fn sums_of_one_light_frames(singles: &[[Vec<Vec3>; 3]], all: &[Vec<Vec3>; 3]) {
     let emits = |f: &[Vec<Vec3>; 3], i: usize| (f[0][i] - f[1][i] - f[2][i]).max_element() > 1e-4;
     let mut compared = 0;
-    for i in 0..frames[0][0].len() {
-        if frames.iter().any(|f| emits(f, i)) {
+    for i in 0..all[0].len() {
+        if singles.iter().chain([all]).any(|f| emits(f, i)) {
             continue;
         }
         compared += 1;
         for (c, name) in [(1, "direct"), (2, "indirect")] {
-            let (sum, both) = (frames[0][c][i] + frames[1][c][i], frames[2][c][i]);
-            let error = ((both - sum).abs() / (sum.abs() + Vec3::splat(1e-3))).max_element();
-            assert!(error < 1e-3, "pixel {i}: {name} {both} with both lights, {sum} summed from one light each");
+            let sum: Vec3 = singles.iter().map(|f| f[c][i]).sum();
+            let error = ((all[c][i] - sum).abs() / (sum.abs() + Vec3::splat(1e-3))).max_element();
+            assert!(
+                error < 1e-3,
+                "pixel {i}: {name} {} with {} lights, {sum} summed from one light each",
+                all[c][i],
+                singles.len()
+            );
         }
     }
-    assert!(compared > 9 * frames[0][0].len() / 10, "only {compared} pixels show no light's geometry");
+    assert!(compared > 9 * all[0].len() / 10, "only {compared} pixels show no light's geometry");
+}
+
+/// A frame lit by `MAX_LIGHTS` lights, each its own colour and place in the light's box, is
+/// the sum of the frames lit by each alone: with the learned direct light on the Cornell box
+/// (16 copies of the ceiling light's geometry), and with analytic direct light on
+/// many-objects (16 point lights, so 16 cube shadow maps, the atlas full).
+#[test]
+fn max_lights_add_up() {
+    for (name, direct) in [("cornell-box", Direct::Learned), ("many-objects", Direct::Analytic)] {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
+        let scene = Scene::load(&dir).unwrap();
+        let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
+        let bounds = scene.moving_light.as_ref().unwrap().bounds;
+        // Spread over the box by the golden-ratio sequence per axis; colours cycle.
+        let lights: Vec<PlacedLight> = (0..MAX_LIGHTS)
+            .map(|i| {
+                let t = |a: f32| (0.5 + i as f32 * a).fract();
+                let position =
+                    bounds.min + (bounds.max - bounds.min) * Vec3::new(t(0.618_034), t(0.754_878), t(0.569_840));
+                let scale = [Vec3::new(1.0, 0.5, 0.3), Vec3::new(0.3, 1.0, 0.5), Vec3::new(0.5, 0.3, 1.0)][i % 3] / 4.0;
+                PlacedLight { position, scale }
+            })
+            .collect();
+        let ctx = gpu();
+        let extent = vk::Extent2D { width: SIZE, height: SIZE };
+        let frame = GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance, direct).unwrap();
+        let render = |lights: &[PlacedLight]| {
+            let settings = FrameSettings {
+                view: scene.views[0].clone(),
+                lights: lights.to_vec(),
+                exposure_scale: 1.0,
+                shown: Shown::Gi,
+            };
+            let pixels = frame.render(&ctx, &settings).unwrap();
+            [rgb(&pixels.gi), rgb(&pixels.direct), rgb(&pixels.indirect)]
+        };
+        let singles: Vec<[Vec<Vec3>; 3]> = lights.iter().map(|l| render(std::slice::from_ref(l))).collect();
+        let all = render(&lights);
+        frame.destroy(&ctx);
+        finish_clean(ctx);
+        assert!(all[1].iter().map(|p| p.element_sum()).sum::<f32>() > 0.0, "{name}: no direct light");
+        sums_of_one_light_frames(&singles, &all);
+    }
 }
