@@ -33,33 +33,32 @@ fn exposure_must_be_a_finite_number_of_stops() {
     }
 }
 
+/// A render over an existing image replaces it whole, with no temporary file left: the image
+/// is then, pixel for pixel, the second render's, as written to a fresh file.
 #[test]
 fn images_are_replaced_whole() {
     let dir = std::env::temp_dir().join(format!("rrf-atomic-{}", std::process::id()));
+    let fresh = std::env::temp_dir().join(format!("rrf-atomic-fresh-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
+    std::fs::create_dir_all(&fresh).unwrap();
     let out = dir.join("frame.png");
-    for exposure in ["0", "-1.5"] {
-        let run = rrf(
-            &[
-                "render",
-                "scenes/cornell-box",
-                "--cpu",
-                "--size",
-                "16x16",
-                "--exposure",
-                exposure,
-                "-o",
-                out.to_str().unwrap(),
-            ],
-            &[],
-        );
+    let render = |exposure: &str, to: &std::path::Path| {
+        let args = ["render", "scenes/cornell-box", "--cpu", "--size", "16x16", "--exposure", exposure];
+        let run = rrf(&[&args[..], &["-o", to.to_str().unwrap()]].concat(), &[]);
         assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    }
+        image::open(to).unwrap().to_rgb8()
+    };
+    let first = render("0", &out);
+    let replaced = render("-1.5", &out);
     let names: Vec<String> =
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     assert_eq!(names, ["frame.png"], "no temporary file is left beside the image");
-    assert_eq!(image::open(&out).unwrap().to_rgb8().dimensions(), (16, 16));
+    let expected = render("-1.5", &fresh.join("frame.png"));
+    assert_eq!(replaced.dimensions(), (16, 16));
+    assert!(replaced == expected, "the replaced image is not the second render's");
+    assert!(replaced != first, "the two exposures render the same image: nothing was replaced");
     std::fs::remove_dir_all(dir).unwrap();
+    std::fs::remove_dir_all(fresh).unwrap();
 }
 
 /// `rrf info SCENE | head -1`: a reader that stops early ends rrf quietly, not with a panic.

@@ -157,7 +157,7 @@ fn without_a_display_it_renders_headless_and_says_where() {
     let dir = temp("headless");
     std::fs::create_dir_all(&dir).unwrap();
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_rrf"));
-    cmd.args(["view", "scenes/cornell-box", "--size", "64x48"])
+    cmd.args(["view", "scenes/cornell-box", "--size", "64x48", "--no-overlay"])
         .env_remove("DISPLAY")
         .env_remove("WAYLAND_DISPLAY")
         .env("RRF_DEVICE", "llvmpipe")
@@ -171,6 +171,8 @@ fn without_a_display_it_renders_headless_and_says_where() {
     assert!(stderr.contains("no display") && stderr.contains("rendering headless"), "{stderr}");
     assert!(stderr.contains("saved screenshot"), "{stderr}");
     assert_eq!(load(&dir.join("view.png")).dimensions(), (64, 48));
+    // The viewer's first frame: the sidecar's default view and the light where the glTF puts it.
+    assert_same_as_render(&dir.join("view.png"), &[], (64, 48));
     let _ = std::fs::remove_dir_all(dir);
 }
 
