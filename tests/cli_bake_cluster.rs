@@ -1,7 +1,8 @@
 //! A bake split across processes, as a cluster's array jobs run it: three shards of each stage
 //! (sample, aim, train), then the merge, write a model byte-identical to a bake in one process
-//! with the same seed. A re-run shard writes the same bytes, and a stage started before the
-//! one it needs names the missing file and the stage to run.
+//! with the same seed, whether the shards run one after another or at the same time. A re-run
+//! shard writes the same bytes, and a stage started before the one it needs, or a merge
+//! without every train shard, names the missing file and the stage to run.
 
 mod common;
 
@@ -78,4 +79,62 @@ fn shard_arguments_are_checked() {
         assert_eq!(run.status.code(), Some(2), "{extra:?}: {stderr}");
         assert!(stderr.contains(expected), "{extra:?}: {stderr}");
     }
+}
+
+/// A cluster runs a stage's shards at the same time on one bake cache: started together, the
+/// three shards of each stage and then the merge still write the model of a bake in one
+/// process. A merge with one train shard's networks missing names a missing file and the
+/// stage to run, exits non-zero, writes no model and leaves the cache for the shard's re-run.
+#[test]
+fn shards_running_at_the_same_time_make_the_same_model() {
+    let dir = scratch("together");
+    let whole = dir.join("whole.safetensors");
+    succeeds(bake(&whole, &[]));
+
+    let split = dir.join("split.safetensors");
+    let cache = dir.join("split.bake-cache");
+    let binary = env!("CARGO_BIN_EXE_rrf");
+    for stage in ["sample", "aim", "train"] {
+        let shards: Vec<_> = (0..3)
+            .map(|i| {
+                let shard = format!("{i}/3");
+                let args = ["bake", "scenes/cornell-box", "--quality", "test", "--seed", "3", "-o"];
+                std::process::Command::new(binary)
+                    .args(args)
+                    .arg(&split)
+                    .args(["--stage", stage, "--shard", &shard])
+                    .env("RRF_DEVICE", "llvmpipe")
+                    .current_dir(env!("CARGO_MANIFEST_DIR"))
+                    .stdout(std::process::Stdio::null())
+                    .stderr(std::process::Stdio::piped())
+                    .spawn()
+                    .unwrap()
+            })
+            .collect();
+        for shard in shards {
+            succeeds(shard.wait_with_output().unwrap());
+        }
+    }
+
+    // One train shard's networks lost: the merge refuses.
+    let networks: Vec<PathBuf> = std::fs::read_dir(&cache)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with("network-"))
+        .collect();
+    assert!(!networks.is_empty(), "the train stage wrote no network files in {}", cache.display());
+    let lost = &networks[0];
+    let kept = std::fs::read(lost).unwrap();
+    std::fs::remove_file(lost).unwrap();
+    let merge = bake(&split, &["--merge"]);
+    let stderr = String::from_utf8_lossy(&merge.stderr);
+    assert_eq!(merge.status.code(), Some(1), "{stderr}");
+    assert!(stderr.contains("missing") && stderr.contains("--stage train"), "{stderr}");
+    assert!(!split.exists(), "a merge that failed wrote a model");
+    assert!(cache.exists(), "a merge that failed removed the bake cache");
+
+    std::fs::write(lost, kept).unwrap();
+    succeeds(bake(&split, &["--merge"]));
+    assert!(std::fs::read(&whole).unwrap() == std::fs::read(&split).unwrap(), "merged model differs");
+    let _ = std::fs::remove_dir_all(dir);
 }
