@@ -407,3 +407,113 @@ fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&N
         info.network(result.params, settings.blend_band).expect("13 input ranges and one network's parameters");
     Trained { network, info, excess: result.val_mse - data.validation_noise, data, converged: result.converged }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+    use crate::bake::{BakeSettings, Quality};
+    use crate::network::raw_inputs;
+
+    /// The Cornell box and its back wall, a plane whose longest side (x) the first cut halves.
+    fn back_wall() -> (Scene, u32) {
+        let scene = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell-box")).unwrap();
+        let wall = scene.object_by_name("BackWall").unwrap().id;
+        (scene, wall)
+    }
+
+    /// `n` direct-light samples spread uniformly over `object`'s box: a ramp along x that any
+    /// network fits, plus Gaussian noise of standard deviation `sigma` per channel, each sample
+    /// declaring the variance `declared` as its noise.
+    fn samples(scene: &Scene, object: u32, n: usize, sigma: f32, declared: f32) -> Vec<Sample> {
+        let Aabb { min, max } = scene.objects[object as usize].bounds();
+        let light = scene.moving_light.as_ref().unwrap().bounds;
+        let mut rng = Rng::new(17, 0);
+        let mut gaussian = || {
+            let (u, v) = (rng.next_f32().max(1e-7), rng.next_f32());
+            (-2.0 * u.ln()).sqrt() * (std::f32::consts::TAU * v).cos()
+        };
+        (0..n)
+            .map(|i| {
+                let t = |k: usize| ((i * 7919 + k * 104_729) % n) as f32 / n as f32;
+                let p = min + (max - min) * Vec3::new((i as f32 + 0.5) / n as f32, t(1), t(2));
+                let l = light.min + (light.max - light.min) * Vec3::new(t(3), t(4), t(5));
+                let ramp = 0.3 + 0.5 * (p.x - min.x) / (max.x - min.x);
+                Sample {
+                    object,
+                    inputs: raw_inputs(p, Vec3::new(0.0, 0.0, -1.0), l, Vec3::new(0.0, 0.0, -1.0), 1.0),
+                    direct: [0; 3].map(|_| ramp + sigma * gaussian()),
+                    indirect: [ramp; 3],
+                    noise: [declared, 0.0],
+                }
+            })
+            .collect()
+    }
+
+    fn settings(scene: &Scene) -> BakeSettings {
+        let mut s = BakeSettings::new(Quality::Test, 1, scene);
+        s.max_iterations = 30;
+        s.split_depth = 1;
+        s
+    }
+
+    fn leaves(scene: &Scene, settings: &BakeSettings, object: u32, samples: &[Sample]) -> Vec<(Network, NetworkInfo)> {
+        let refs: Vec<&Sample> = samples.iter().collect();
+        train_tree(scene, settings, object, Component::Direct, &refs)
+    }
+
+    /// A node is split exactly when its network's error is above the noise its samples
+    /// declare: the same noisy ramp stays whole when the samples declare more noise than it
+    /// has, and is split when they declare less.
+    #[test]
+    fn nodes_split_only_where_the_error_is_above_the_noise() {
+        let (scene, wall) = back_wall();
+        let sigma = 0.1f32;
+        let settings = settings(&scene);
+        let declared_high = samples(&scene, wall, 1500, sigma, 1.5 * sigma * sigma);
+        assert_eq!(leaves(&scene, &settings, wall, &declared_high).len(), 1, "noise declared above the error");
+        let declared_low = samples(&scene, wall, 1500, sigma, 0.5 * sigma * sigma);
+        assert_eq!(leaves(&scene, &settings, wall, &declared_low).len(), 2, "noise declared below the error");
+    }
+
+    /// A split that would leave a half with fewer than `min_samples` samples is not made.
+    #[test]
+    fn nodes_split_only_into_halves_with_enough_samples() {
+        let (scene, wall) = back_wall();
+        let mut settings = settings(&scene);
+        let sigma = 0.1f32;
+        let noisy = samples(&scene, wall, 1500, sigma, 0.5 * sigma * sigma);
+        // Each half holds 55% of the samples: its half and a band of 10% of its size.
+        settings.min_samples = 800;
+        assert_eq!(leaves(&scene, &settings, wall, &noisy).len(), 2);
+        settings.min_samples = 850;
+        assert_eq!(leaves(&scene, &settings, wall, &noisy).len(), 1);
+    }
+
+    /// Each half learns from its own half of the object and a band across the cut 10% of the
+    /// half's size deep, so the halves' sample sets overlap.
+    #[test]
+    fn halves_learn_from_a_band_across_the_cut() {
+        let (scene, wall) = back_wall();
+        let mut settings = settings(&scene);
+        settings.blend_band = 0.0; // no blend fit, which draws its own samples
+        let sigma = 0.1f32;
+        let noisy = samples(&scene, wall, 1500, sigma, 0.5 * sigma * sigma);
+        let halves = leaves(&scene, &settings, wall, &noisy);
+        assert_eq!(halves.len(), 2);
+        let Aabb { min, max } = scene.objects[wall as usize].bounds();
+        let at = 0.5 * (min.x + max.x);
+        let band = 0.1 * (at - min.x);
+        for (network, info) in &halves {
+            let cut = info.region.0[0];
+            assert_eq!((cut.axis, cut.at), (0, at), "{:?}", network.region);
+            let inside = noisy
+                .iter()
+                .filter(|s| if cut.below { s.inputs[0] <= at + band } else { s.inputs[0] >= at - band })
+                .count();
+            assert_eq!(info.samples, inside, "below: {}", cut.below);
+            assert!(inside > 1500 / 2 + 50, "{inside} samples");
+        }
+    }
+}
