@@ -25,7 +25,18 @@ fn run_bake(output: &Path) -> std::process::Output {
 }
 
 fn start_bake(output: &Path) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_rrf"))
+    start_bake_holding(output, None)
+}
+
+/// A bake that, given `hold_after`, stops once that many networks are done and waits to be
+/// killed or interrupted (`RRF_BAKE_HOLD_AFTER_NETWORKS`): it cannot finish before the test's
+/// signal reaches it.
+fn start_bake_holding(output: &Path, hold_after: Option<usize>) -> Child {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_rrf"));
+    if let Some(n) = hold_after {
+        command.env("RRF_BAKE_HOLD_AFTER_NETWORKS", n.to_string());
+    }
+    command
         .args(bake_args(output))
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .stdout(Stdio::piped())
@@ -87,16 +98,17 @@ fn interrupted_bakes_resume_to_the_same_model() {
     bake.wait().unwrap();
     assert!(!model.exists() && lock.exists(), "killed: no model, a stale lock left behind");
 
-    // Killed while training.
-    let mut bake = start_bake(&model);
+    // Killed while training, holding after its first network.
+    let mut bake = start_bake_holding(&model, Some(1));
     wait_until(&mut bake, "a trained network", || count(&cache, "network-") >= 1);
     signal(&bake, libc::SIGKILL);
     bake.wait().unwrap();
     assert!(!model.exists());
 
-    // Ctrl-C: stops, says how to resume, releases the lock.
-    let mut bake = start_bake(&model);
+    // Ctrl-C, holding after one network more than the cache has (so at least one trained
+    // here): stops, says how to resume, releases the lock.
     let trained = count(&cache, "network-");
+    let mut bake = start_bake_holding(&model, Some(trained + 1));
     wait_until(&mut bake, "another trained network", || count(&cache, "network-") > trained);
     signal(&bake, libc::SIGINT);
     let out = bake.wait_with_output().unwrap();

@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, ValueEnum};
 use rrf_baker::bake::lock::{BakeLock, Contended};
 use rrf_baker::bake::{bake_part, BakeProgress, BakeReport, BakeSettings, Part, Quality, Stage, Trained};
@@ -99,7 +99,16 @@ fn parse_shard(text: &str) -> Result<(u32, u32), String> {
 struct Bars {
     sampling: Progress,
     training: Progress,
+    /// [`HOLD_AFTER_NETWORKS`].
+    hold_after: Option<u64>,
 }
+
+/// For tests: with `RRF_BAKE_HOLD_AFTER_NETWORKS=N` a bake stops making progress once N of its
+/// networks are done (trained and in the cache, or resumed from it) and waits until it is
+/// killed or interrupted, so that a test interrupts it at a known point instead of racing it.
+/// As at most the cache's networks can be resumed, holding after one more than the cache
+/// holds means at least one network was trained and written.
+const HOLD_AFTER_NETWORKS: &str = "RRF_BAKE_HOLD_AFTER_NETWORKS";
 
 impl BakeProgress for Bars {
     fn sampled(&self, done: u64, total: u64) {
@@ -108,6 +117,11 @@ impl BakeProgress for Bars {
 
     fn trained(&self, done: u64, total: u64) {
         self.training.set(done, total);
+        if self.hold_after.is_some_and(|n| done >= n) {
+            loop {
+                std::thread::park();
+            }
+        }
     }
 }
 
@@ -231,9 +245,14 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         }
     };
     stop_on_ctrl_c(lock.as_ref().map(|l| l.path().to_path_buf()), &cache);
+    let hold_after = match std::env::var(HOLD_AFTER_NETWORKS) {
+        Ok(n) => Some(n.parse().map_err(|_| anyhow!("{HOLD_AFTER_NETWORKS}={n:?}: expected a count of networks"))?),
+        Err(_) => None,
+    };
     let bars = Bars {
         sampling: Progress::new(u64::from(settings.configurations), "sampling", args.json),
         training: Progress::new(1, "training", args.json),
+        hold_after,
     };
     let (model, report) = bake_part(&scene, &settings, &cache, &bars, part)?;
     bars.sampling.finish();
