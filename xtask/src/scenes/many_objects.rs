@@ -244,12 +244,6 @@ max = [2.0, 2.8, 2.0]
 min = [-2.3, 1.0, 1.4]
 max = [2.3, 2.2, 2.9]
 
-# 32 objects, over a million samples: fewer iterations and half the preset's paths per sample
-# keep the final bake under 15 minutes.
-[bake.final]
-max_iterations = 40
-paths_per_sample = 128
-
 [views.table]
 eye = [1.9, 1.5, 1.9]
 target = [0.0, 0.7, 0.0]
