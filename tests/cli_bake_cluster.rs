@@ -7,15 +7,19 @@
 mod common;
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
+use std::process::{Command, Output, Stdio};
 
-use common::rrf;
+use common::rrf_command;
 
 fn bake(output: &Path, extra: &[&str]) -> Output {
+    bake_command(output, extra).output().expect("run rrf")
+}
+
+fn bake_command(output: &Path, extra: &[&str]) -> Command {
     let output = output.to_str().unwrap();
     let mut args = vec!["bake", "scenes/cornell-box", "--quality", "test", "--seed", "3", "-o", output];
     args.extend(extra);
-    rrf(&args, &[])
+    rrf_command(&args, &[])
 }
 
 /// A fresh folder for test `name`: the tests run in parallel, so each needs its own.
@@ -93,20 +97,12 @@ fn shards_running_at_the_same_time_make_the_same_model() {
 
     let split = dir.join("split.safetensors");
     let cache = dir.join("split.bake-cache");
-    let binary = env!("CARGO_BIN_EXE_rrf");
     for stage in ["sample", "aim", "train"] {
         let shards: Vec<_> = (0..3)
             .map(|i| {
-                let shard = format!("{i}/3");
-                let args = ["bake", "scenes/cornell-box", "--quality", "test", "--seed", "3", "-o"];
-                std::process::Command::new(binary)
-                    .args(args)
-                    .arg(&split)
-                    .args(["--stage", stage, "--shard", &shard])
-                    .env("RRF_DEVICE", "llvmpipe")
-                    .current_dir(env!("CARGO_MANIFEST_DIR"))
-                    .stdout(std::process::Stdio::null())
-                    .stderr(std::process::Stdio::piped())
+                bake_command(&split, &["--stage", stage, "--shard", &format!("{i}/3")])
+                    .stdout(Stdio::null())
+                    .stderr(Stdio::piped())
                     .spawn()
                     .unwrap()
             })

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::rrf;
+use common::{rrf, rrf_command};
 
 fn bake_args(output: &Path) -> Vec<String> {
     ["bake", "scenes/cornell-box", "--quality", "preview", "--seed", "5", "--json", "-o"]
@@ -32,13 +32,10 @@ fn start_bake(output: &Path) -> Child {
 /// killed or interrupted (`RRF_BAKE_HOLD_AFTER_NETWORKS`): it cannot finish before the test's
 /// signal reaches it.
 fn start_bake_holding(output: &Path, hold_after: Option<usize>) -> Child {
-    let mut command = Command::new(env!("CARGO_BIN_EXE_rrf"));
-    if let Some(n) = hold_after {
-        command.env("RRF_BAKE_HOLD_AFTER_NETWORKS", n.to_string());
-    }
-    command
-        .args(bake_args(output))
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
+    let args = bake_args(output);
+    let hold = hold_after.map(|n| n.to_string());
+    let env: Vec<(&str, &str)> = hold.iter().map(|n| ("RRF_BAKE_HOLD_AFTER_NETWORKS", n.as_str())).collect();
+    rrf_command(&args.iter().map(String::as_str).collect::<Vec<_>>(), &env)
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()

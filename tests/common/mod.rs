@@ -29,12 +29,17 @@ pub fn finish_clean(ctx: Context) {
 
 /// Runs the `rrf` binary on lavapipe with extra environment variables.
 pub fn rrf(args: &[&str], env: &[(&str, &str)]) -> std::process::Output {
+    rrf_command(args, env).output().expect("run rrf")
+}
+
+/// The command [`rrf`] runs, for a test that starts it and waits later.
+pub fn rrf_command(args: &[&str], env: &[(&str, &str)]) -> std::process::Command {
     let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_rrf"));
     cmd.args(args).env("RRF_DEVICE", "llvmpipe").current_dir(env!("CARGO_MANIFEST_DIR"));
     for (k, v) in env {
         cmd.env(k, v);
     }
-    cmd.output().expect("run rrf")
+    cmd
 }
 
 /// Pixels of two RGB images that differ by more than `levels` in some channel, and the mean

@@ -232,14 +232,10 @@ fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInf
         }
         let lm_settings = LmSettings { max_iterations: settings.max_iterations, patience: BLEND_PATIENCE };
         let result = lm::train(&train, &validation, network.params.clone(), &lm_settings);
-        let scale2 = f64::from(rms) * f64::from(rms);
         let (network, info) = &mut leaves[i];
-        network.params = result.params;
+        trained_on(network, info, result);
         info.samples = train.len() + validation.len();
-        info.train_mse = result.train_mse * scale2;
-        info.val_mse = result.val_mse * scale2;
         info.val_noise = noise / validation.len().max(1) as f64;
-        info.iterations += result.iterations;
     }
 }
 
@@ -300,12 +296,18 @@ fn finish(tree: Tree, trained: Trained) -> (Network, NetworkInfo) {
     }
     let settings = LmSettings { max_iterations: left, patience: PATIENCE };
     let result = lm::train(&data.train, &data.validation, network.params.clone(), &settings);
-    let scale2 = f64::from(data.output_scale) * f64::from(data.output_scale);
+    trained_on(&mut network, &mut info, result);
+    (network, info)
+}
+
+/// `network` after more Levenberg–Marquardt iterations: their parameters, and its record's
+/// errors (in radiance units) and iteration count.
+fn trained_on(network: &mut Network, info: &mut NetworkInfo, result: lm::LmResult) {
+    let scale2 = f64::from(network.output_scale) * f64::from(network.output_scale);
     network.params = result.params;
     info.train_mse = result.train_mse * scale2;
     info.val_mse = result.val_mse * scale2;
     info.iterations += result.iterations;
-    (network, info)
 }
 
 /// A network's training stops after this many iterations without a better validation error.
