@@ -31,6 +31,9 @@ pub struct Geometry {
     bvh_triangles: Vec<RtTriangle>,
     /// BVH leaf order to triangle id.
     bvh_ids: Vec<u32>,
+    /// BVH leaf order to whether the triangle is alpha-masked, so that a miss, the common
+    /// case, reads nothing but the triangle.
+    bvh_masked: Vec<bool>,
     /// Every triangle of the scene, by id.
     pub triangles: Vec<TriangleInfo>,
     /// World-space vertices of all objects (the moving light at its default position).
@@ -75,6 +78,7 @@ impl Geometry {
             bvh: CwBvh::default(),
             bvh_triangles: Vec::new(),
             bvh_ids: Vec::new(),
+            bvh_masked: Vec::new(),
             triangles: Vec::with_capacity(scene.triangle_count()),
             positions: Vec::new(),
             normals: Vec::new(),
@@ -116,6 +120,7 @@ impl Geometry {
         if !tris.is_empty() {
             g.bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut Default::default());
             g.bvh_ids = g.bvh.primitive_indices.iter().map(|&i| static_ids[i as usize]).collect();
+            g.bvh_masked = g.bvh_ids.iter().map(|&id| g.triangles[id as usize].masked).collect();
             g.bvh_triangles = g.bvh.primitive_indices.iter().map(|&i| RtTriangle::from(&tris[i as usize])).collect();
         }
         g
@@ -125,7 +130,8 @@ impl Geometry {
     pub fn corners(&self, id: u32, offset: Vec3) -> [Vec3; 3] {
         let info = &self.triangles[id as usize];
         let shift = if info.moving { offset } else { Vec3::ZERO };
-        info.vertices.map(|v| self.positions[v as usize] + shift)
+        let [a, b, c] = info.vertices;
+        [self.positions[a as usize] + shift, self.positions[b as usize] + shift, self.positions[c as usize] + shift]
     }
 
     /// The moving light's triangles, one copy per light, each light `offsets[copy]` from the
@@ -152,9 +158,14 @@ impl Geometry {
     }
 
     /// `test` of static triangle `i` in BVH order.
+    #[inline(always)]
     fn test_static(&self, ray: &Ray, i: usize, covers: Covers) -> f32 {
-        let hit = Hit { t: self.bvh_triangles[i].intersect(ray), triangle: self.bvh_ids[i], copy: 0 };
-        self.test(hit, covers)
+        let t = self.bvh_triangles[i].intersect(ray);
+        if t < f32::INFINITY && self.bvh_masked[i] && !covers(Hit { t, triangle: self.bvh_ids[i], copy: 0 }) {
+            f32::INFINITY
+        } else {
+            t
+        }
     }
 
     /// Closest hit in `[tmin, tmax]` against the BVH and the moved light triangles; a masked
@@ -174,12 +185,11 @@ impl Geometry {
         {
             best = Some(Hit { t: hit.t, triangle: self.bvh_ids[hit.primitive_id as usize], copy: 0 });
         }
+        let mut ray = ray;
         for m in moved {
-            let limit = best.map_or(tmax, |h| h.t);
-            let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, limit);
+            ray.tmax = best.map_or(tmax, |h| h.t);
             let candidate = Hit { t: m.placed.intersect(&ray), triangle: m.triangle, copy: m.copy };
-            let t = self.test(candidate, covers);
-            if t < limit {
+            if self.test(candidate, covers) < ray.tmax {
                 best = Some(candidate);
             }
         }
