@@ -98,15 +98,15 @@ fn compare_with(
     }
 }
 
-/// Texels per side of a shadow map's cube face (`SHADOW_SIZE`).
-const SHADOW_SIZE: f32 = 256.0;
+/// Texels per side of a shadow map's cube face.
+const SHADOW_SIZE: f32 = rrf_renderer::shadow::SHADOW_SIZE as f32;
 
 /// Pixels where a cube shadow map cannot say whether the surface is lit: those whose point,
 /// moved off its surface by a texel as the GPU moves it, is nearer to the light than the first
 /// hit along some rays from the light within a texel and a half of it (the 2×2 texels the GPU
 /// filters) but not along others, or where the moved point and the CPU's shadow ray to the
 /// point itself disagree (an occluder within a texel of the surface: contact shadows). A
-/// texel's angle is taken at a face's centre, where texels are widest (2/256 radians), and
+/// texel's angle is taken at a face's centre, where texels are widest (2/SHADOW_SIZE radians), and
 /// the GPU's tolerance of half a texel is kept. Everywhere else the GPU's shadow must be the
 /// CPU's.
 fn shadow_edges(world: &World, camera: &Camera, (width, height): (u32, u32)) -> Vec<bool> {
