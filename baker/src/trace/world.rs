@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use super::bsdf::Bsdf;
-use super::geometry::{Geometry, Hit, MovedTriangle};
+use super::geometry::{corner_values, Geometry, Hit, MovedTriangle};
 use super::sampling::uniform_triangle;
 use crate::scene::{Cone, LightKind, PlacedLight, Scene, TextureRef};
 
@@ -299,12 +299,6 @@ fn barycentrics([p0, p1, p2]: [Vec3; 3], p: Vec3) -> Vec3 {
         (0.0, 0.0)
     };
     Vec3::new((1.0 - b1 - b2).max(0.0), b1, b2)
-}
-
-/// A vertex attribute at a triangle's three `vertices`. (Indexing by hand: `[u32; 3]::map`
-/// was not inlined here, and cost 2.5% of the path tracer's time.)
-fn corner_values<T: Copy>(values: &[T], [a, b, c]: [u32; 3]) -> [T; 3] {
-    [values[a as usize], values[b as usize], values[c as usize]]
 }
 
 fn interpolate<T>(values: [T; 3], b: Vec3) -> T
