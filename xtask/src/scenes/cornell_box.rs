@@ -77,7 +77,7 @@ max = [0.50, 0.50, 0.05]
 # 8,000 rays per configuration (twice the preset) find 306,000, enough for the floor behind the
 # blocks and the blocks' shadow edges, trained to depth 3 with up to 100 iterations; 1,024 paths
 # per sample (4x the preset) keep the targets' noise low. Held-out gi FLIP 0.053 -> 0.041 against
-# 2048-spp references, and a final bake of about 14 minutes here (BENCHMARKS.md, "More samples, a deeper tree").
+# 2048-spp references, and a final bake of about 8 minutes here (BENCHMARKS.md, "More samples, a deeper tree" and "Baking").
 [bake.final]
 paths_per_sample = 1024
 rays_per_configuration = 8000
@@ -94,11 +94,11 @@ eye = [0.48, 0.45, -0.05]
 target = [0.2, 0.1, 0.4]
 fov_y = 60.0
 
-# Two 256-spp references differ by 0.038 FLIP here, three quarters of the 0.05 target; at 2048 spp
-# by 0.0185 (BENCHMARKS.md), so the target can be read. The first eval path-traces for about an
-# hour on two cores; later ones read the cached references.
+# Two 256-spp references differ by 0.038 FLIP here, three quarters of the 0.05 target; at 3072 spp
+# by 0.016, a third (BENCHMARKS.md, "The Cornell box's blended model against its references"). The
+# first eval path-traces for about 35 minutes on two cores; later ones read the cached references.
 [eval]
-spp = 2048
+spp = 3072
 "#
     );
     (b, sidecar)
