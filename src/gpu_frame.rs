@@ -13,14 +13,15 @@ use rrf_baker::model::Model;
 use rrf_baker::network::{Component, Network};
 use rrf_baker::partition::Region;
 use rrf_baker::scene::{PlacedLight, Scene, View};
-use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
-use rrf_renderer::network_pass::{
+use rrf_renderer::backend::sync::read_back_passes;
+use rrf_renderer::backend::sync::{run_passes, Pass, Resource, ResourceStates};
+use rrf_renderer::passes::gbuffer::{GBufferPass, GBufferTargets, GBufferTexel};
+use rrf_renderer::passes::mesh::GBufferMesh;
+use rrf_renderer::passes::network::{
     DirectLight, LeafBlend, NetworkConstants, NetworkPass, NetworkShaders, NetworkUnit, NetworkWeights, Variant,
 };
-use rrf_renderer::overlay::{OverlayPass, TextGrid};
-use rrf_renderer::resources::read_back_passes;
-use rrf_renderer::sync::{run_passes, Pass, Resource, ResourceStates};
-use rrf_renderer::tonemap::TonemapPass;
+use rrf_renderer::passes::overlay::{OverlayPass, TextGrid};
+use rrf_renderer::passes::tonemap::TonemapPass;
 use rrf_renderer::{vk, Context, Destroy, Image};
 
 use crate::gpu_scene::{
@@ -239,7 +240,7 @@ impl Direct {
 #[derive(Clone, Debug)]
 pub struct FrameSettings {
     pub view: View,
-    /// The lights: copies of the moving light (1 to `network_pass::MAX_LIGHTS`).
+    /// The lights: copies of the moving light (1 to `rrf_renderer::lights::MAX_LIGHTS`).
     pub lights: Vec<PlacedLight>,
     /// 2^EV.
     pub exposure_scale: f32,

@@ -3,8 +3,9 @@
 
 use rrf_baker::glam::{Mat4, Vec3, Vec4};
 use rrf_baker::scene::{self, AlphaMode, ColorSpace, LightKind, PlacedLight, Scene, View};
-use rrf_renderer::gbuffer::{GBufferConstants, GBufferVertex, LightCopy, SurfaceMaterial, TextureRef};
-use rrf_renderer::network_pass::{NetworkLight, PointLightShape, Spot};
+use rrf_renderer::lights::{NetworkLight, PointLightShape, Spot};
+use rrf_renderer::passes::gbuffer::{GBufferConstants, LightCopy};
+use rrf_renderer::passes::mesh::{GBufferVertex, SurfaceMaterial, TextureRef};
 
 /// The object id of the moving light's own geometry (an area light), if it has any.
 pub fn moving_light_object(scene: &Scene) -> Option<u32> {

@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::{bail, Context, Result};
 use rrf_baker::atomic_file::write_atomically;
 use rrf_baker::glam::Vec3;
-use rrf_renderer::tonemap::tonemap;
+use rrf_renderer::passes::tonemap::tonemap;
 
 /// What an image output path holds, by its extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

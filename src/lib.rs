@@ -11,6 +11,7 @@ pub mod gpu_frame;
 pub mod gpu_scene;
 pub mod image_out;
 pub mod lights;
+pub mod parse;
 pub mod progress;
 pub mod shaders;
 pub mod viewer;

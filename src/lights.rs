@@ -7,9 +7,9 @@
 use anyhow::{bail, Context, Result};
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::{PlacedLight, Scene};
-pub use rrf_renderer::network_pass::MAX_LIGHTS;
+pub use rrf_renderer::lights::MAX_LIGHTS;
 
-use crate::commands::view_args::parse_vec3;
+use crate::parse::parse_vec3;
 
 /// The brightest a light may be made, relative to the glTF's: the G-buffer keeps the scaled
 /// emission of the light's own geometry as half floats.

@@ -1,5 +1,5 @@
 // The network's shape and parameter layout: the one definition that the baker
-// (`network.rs`), the renderer (`network_pass.rs`, through `include!`) and the shaders
+// (`network.rs`), the renderer (`passes/network/`, through `include!`) and the shaders
 // (build.rs writes these as `network_layout.glsl`) all use. Plain constants only, so that a
 // build script can include the file.
 

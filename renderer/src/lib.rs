@@ -3,28 +3,16 @@
 //! It knows nothing of glTF or path tracing: scenes arrive as plain arrays and shaders as
 //! SPIR-V words compiled by the root crate's build script.
 
-pub mod compute;
-pub mod context;
-pub mod descriptors;
-pub mod device_info;
+pub mod backend;
 pub mod error;
-pub mod frames;
-pub mod gbuffer;
-pub mod guard;
-pub mod network_pass;
-pub mod overlay;
-pub mod resources;
-pub mod shadow;
-pub mod swapchain;
-pub mod sync;
-pub mod tonemap;
-pub mod validation;
+pub mod lights;
+pub mod passes;
 
 pub use ash::vk;
-pub use context::{Context, ContextOptions, TeardownReport};
-pub use device_info::DeviceInfo;
+pub use backend::context::{Context, ContextOptions, TeardownReport};
+pub use backend::device_info::DeviceInfo;
+pub use backend::guard::{Destroy, Guard};
+pub use backend::resources::{Buffer, Image};
+pub use backend::validation::Validation;
 pub use error::{Error, Result};
 pub use gpu_allocator::MemoryLocation;
-pub use guard::{Destroy, Guard};
-pub use resources::{Buffer, Image};
-pub use validation::Validation;

@@ -1,5 +1,5 @@
 // The packed G-buffer, 36 bytes per pixel plus depth, written by gbuffer.frag and read by the
-// network passes; mirrored by renderer/src/gbuffer.rs (`GBufferTexel`).
+// network passes; mirrored by renderer/src/passes/gbuffer/texel.rs (`GBufferTexel`).
 //
 //   surface (rgba32ui): xyz the world position's float bits, w the shading normal
 //                       (octahedral, two 16-bit snorms)

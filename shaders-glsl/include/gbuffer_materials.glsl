@@ -1,4 +1,4 @@
-// Materials and textures as the G-buffer pass reads them (renderer/src/gbuffer.rs:
+// Materials and textures as the G-buffer pass reads them (renderer/src/passes/mesh.rs:
 // `SurfaceMaterial`, `TextureRef`), sampled exactly as the path tracer samples them
 // (`Material::shading` and `Texture::sample` in baker/src/scene/): bilinear, repeating, no
 // mipmaps, sRGB decoded per texel before filtering. So the networks see the same inputs on

@@ -1,9 +1,9 @@
 // Radiance regression function on the GPU: INPUTS → HIDDEN1 tanh → HIDDEN2 tanh → 3, reading
 // the parameters from `weights` at `base`, with the input normalisation and the output scale
-// folded in (network_pass.rs, `fold`), so that it takes raw inputs. Follows baker/src/network.rs (`Network::evaluate`,
-// `forward`), with the first layer split in two so that several lights share its per-pixel
-// part; the shape and parameter offsets come from
-// baker/src/network_layout.rs (through network_inputs.glsl).
+// folded in (renderer/src/passes/network/weights.rs, `fold`), so that it takes raw inputs.
+// Follows baker/src/network.rs (`Network::evaluate`, `forward`), with the first layer split
+// in two so that several lights share its per-pixel part; the shape and parameter offsets come
+// from baker/src/network_layout.rs (through network_inputs.glsl).
 #ifndef RRF_NETWORK_GLSL
 #define RRF_NETWORK_GLSL
 

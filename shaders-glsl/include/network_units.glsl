@@ -1,8 +1,9 @@
 // The network units: the parts of objects that each have one direct and one indirect network
 // (the whole object, or where a leaf of its direct kd-tree meets one of its indirect tree;
-// baker/src/partition.rs). network_pass.rs (`unit_table`) writes the table: per object (id - 1)
-// the index of its first unit and how many it has (0: no networks), then per unit
-// UNIT_BLEND floats: the blend boxes of its direct and its indirect leaf.
+// baker/src/partition.rs). renderer/src/passes/network/units.rs (`unit_table`) writes the
+// table: per object (id - 1) the index of its first unit and how many it has (0: no
+// networks), then per unit UNIT_BLEND floats: the blend boxes of its direct and its indirect
+// leaf.
 //
 // Leaves blend across their cuts: a unit's weight at a point is its direct leaf's weight
 // times its indirect leaf's, and an object's units' weights sum to one, so that the pixel's

@@ -1,4 +1,4 @@
-// Cube shadow maps of point lights, all in one atlas image (`renderer/src/shadow.rs`): light l's
+// Cube shadow maps of point lights, all in one atlas image (`renderer/src/passes/shadow.rs`): light l's
 // six faces side by side in row l, each SHADOW_SIZE² texels holding the distance from the
 // light to the nearest surface. Face f looks along axis f / 2, towards + for even f and − for
 // odd f, with a 90° frustum. shadow.vert renders with `cube_face_clip`, and the network pass
@@ -6,7 +6,7 @@
 #ifndef RRF_SHADOW_CUBE_GLSL
 #define RRF_SHADOW_CUBE_GLSL
 
-// Texels per side of a face: renderer/src/shadow.rs's SHADOW_SIZE.
+// Texels per side of a face: renderer/src/passes/shadow.rs's SHADOW_SIZE.
 #define SHADOW_SIZE 256
 const float SHADOW_NEAR = 0.01;
 const float SHADOW_FAR = 1000.0;

@@ -1,5 +1,5 @@
 // Display transform: exposure, then the ACES filmic curve fitted by Narkowicz (2015), then
-// the sRGB transfer function. Mirrored line for line by renderer/src/tonemap.rs.
+// the sRGB transfer function. Mirrored line for line by renderer/src/passes/tonemap.rs.
 #ifndef RRF_TONEMAP_GLSL
 #define RRF_TONEMAP_GLSL
 

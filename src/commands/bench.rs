@@ -8,7 +8,7 @@ use clap::{Args, ValueEnum};
 use rrf_baker::model::Model;
 use rrf_baker::network::Component;
 use rrf_baker::scene::{PlacedLight, Scene, View};
-use rrf_renderer::frames::{FrameLoop, FRAMES_IN_FLIGHT};
+use rrf_renderer::backend::frames::{FrameLoop, FRAMES_IN_FLIGHT};
 use rrf_renderer::{vk, Context, ContextOptions, Validation};
 use serde_json::json;
 
@@ -96,7 +96,7 @@ pub struct BenchArgs {
 }
 
 pub fn run(args: &BenchArgs) -> Result<()> {
-    let (width, height) = super::view_args::parse_size(&args.size)?;
+    let (width, height) = crate::parse::parse_size(&args.size)?;
     let scene = Scene::load(&args.scene)?;
     let model = Model::load(&args.model.clone().unwrap_or_else(|| scene.model_file()), Some(&scene))?;
     let view = super::view_args::named_view(&scene, args.view.as_deref())?;

@@ -2,7 +2,7 @@
 
 use clap::builder::PossibleValue;
 use clap::ValueEnum;
-use rrf_renderer::network_pass::Variant;
+use rrf_renderer::passes::network::Variant;
 
 /// A network pass variant as a command-line value; the help lists what each one does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

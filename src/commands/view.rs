@@ -5,12 +5,13 @@ use std::path::PathBuf;
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, ValueEnum};
 use rrf_baker::scene::Scene;
-use rrf_renderer::{swapchain, vk, Context, ContextOptions};
+use rrf_renderer::{backend::swapchain, vk, Context, ContextOptions};
 
 use super::bake::model_to_render;
 use super::variant::VariantArg;
-use super::view_args::{named_view, parse_size};
+use super::view_args::named_view;
 use crate::gpu_frame::Direct;
+use crate::parse::parse_size;
 use crate::viewer::renderer::Renderer;
 use crate::viewer::script::Script;
 use crate::viewer::state::ViewerState;

@@ -16,7 +16,7 @@
 //! implementation (the `flip-evaluator` package).
 
 use rrf_baker::glam::Vec3;
-use rrf_renderer::tonemap::{aces_fitted, linear_to_srgb};
+use rrf_renderer::passes::tonemap::{aces_fitted, linear_to_srgb};
 
 /// FLIP's tonemapper is the renderer's ACES fit after an exposure of 0.6.
 const PRE_EXPOSURE: f32 = 0.6;

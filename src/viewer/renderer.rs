@@ -8,11 +8,11 @@ use std::rc::Rc;
 use anyhow::{Context as _, Result};
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
-use rrf_renderer::frames::FrameLoop;
-use rrf_renderer::network_pass::Variant;
-use rrf_renderer::resources::read_back_passes;
-use rrf_renderer::swapchain::{Surface, Swapchain};
-use rrf_renderer::sync::{Access, Pass, Resource, Use};
+use rrf_renderer::backend::frames::FrameLoop;
+use rrf_renderer::backend::swapchain::{Surface, Swapchain};
+use rrf_renderer::backend::sync::read_back_passes;
+use rrf_renderer::backend::sync::{Access, Pass, Resource, Use};
+use rrf_renderer::passes::network::Variant;
 use rrf_renderer::{vk, Context, Image};
 
 use super::state::ViewerState;

@@ -25,9 +25,9 @@ use anyhow::{anyhow, bail, Context, Result};
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::PlacedLight;
 
-use crate::commands::view_args::{parse_exposure, parse_size, parse_vec3};
 use crate::gpu_frame::Shown;
 use crate::lights::parse_light;
+use crate::parse::{parse_exposure, parse_size, parse_vec3};
 
 /// Script time per frame.
 pub const FRAME_SECONDS: f64 = 1.0 / 60.0;

@@ -5,13 +5,13 @@
 use anyhow::{bail, Result};
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::{Aabb, PlacedLight, Scene, View};
-use rrf_renderer::overlay::{Colour, TextGrid};
+use rrf_renderer::passes::overlay::{Colour, TextGrid};
 
 use super::script::Action;
-use crate::commands::view_args::MAX_EXPOSURE;
 use crate::frame_stats::Stats;
 use crate::gpu_frame::{Direct, FrameSettings, Shown, TIMED_PASSES};
 use crate::lights::{fixed_lights, MAX_INTENSITY, MAX_LIGHTS};
+use crate::parse::MAX_EXPOSURE;
 
 /// Keys that act for as long as they are held.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -2,7 +2,7 @@
 
 use anyhow::{Context as _, Result};
 use raw_window_handle::{HasDisplayHandle, HasWindowHandle};
-use rrf_renderer::swapchain::Surface;
+use rrf_renderer::backend::swapchain::Surface;
 use rrf_renderer::vk;
 use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
@@ -44,7 +44,7 @@ pub fn event_loop() -> Result<EventLoop<()>> {
 /// The instance extensions a window on this event loop's display needs.
 pub fn instance_extensions(event_loop: &EventLoop<()>) -> Result<Vec<&'static std::ffi::CStr>> {
     let display = event_loop.display_handle().context("no display handle")?.as_raw();
-    Ok(rrf_renderer::swapchain::required_instance_extensions(display)?)
+    Ok(rrf_renderer::backend::swapchain::required_instance_extensions(display)?)
 }
 
 struct App<'a> {

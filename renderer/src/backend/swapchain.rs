@@ -7,7 +7,7 @@ use std::ffi::CStr;
 use ash::vk;
 use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 
-use crate::context::Context;
+use crate::backend::context::Context;
 use crate::error::{Error, Result, VkContext};
 
 /// Instance extensions that a surface for `display` needs.

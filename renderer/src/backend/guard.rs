@@ -8,7 +8,7 @@
 
 use std::ops::{Deref, DerefMut};
 
-use crate::context::Context;
+use crate::backend::context::Context;
 
 /// A GPU object that is destroyed through its context. Destroying an object whose handles
 /// are null (one only partly made) is fine.

@@ -8,13 +8,14 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
-use crate::context::Context;
+use crate::backend::context::Context;
+use crate::backend::guard::Destroy;
+use crate::backend::resources::Image;
+use crate::backend::sync::{Access, Pass, ResourceStates, Use};
 use crate::error::{Result, VkContext};
-use crate::gbuffer::{cleared_depth, GBufferMesh, Raster, DEPTH_FORMAT};
-use crate::guard::Destroy;
-use crate::network_pass::MAX_LIGHTS;
-use crate::resources::Image;
-use crate::sync::{Access, Pass, ResourceStates, Use};
+use crate::lights::MAX_LIGHTS;
+use crate::passes::mesh::GBufferMesh;
+use crate::passes::raster::{cleared_depth, Raster, DEPTH_FORMAT};
 
 /// Texels per side of a cube face (`SHADOW_SIZE` in `shadow_cube.glsl`).
 pub const SHADOW_SIZE: u32 = 256;

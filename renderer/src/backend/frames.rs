@@ -3,7 +3,7 @@
 
 use ash::vk;
 
-use crate::context::Context;
+use crate::backend::context::Context;
 use crate::error::{Result, VkContext};
 
 /// Frames the CPU may record ahead of the GPU.

@@ -1,15 +1,15 @@
 //! Compute pipelines of one shader with one descriptor set bound at creation
-//! ([`crate::descriptors`]). A pass can hold several pipelines of the same shader that differ
+//! ([`crate::backend::descriptors`]). A pass can hold several pipelines of the same shader that differ
 //! only in specialization constants.
 
 use ash::vk;
 
-use crate::context::Context;
-pub use crate::descriptors::Bind;
-use crate::descriptors::BoundSet;
+use crate::backend::context::Context;
+pub use crate::backend::descriptors::Bind;
+use crate::backend::descriptors::BoundSet;
+use crate::backend::guard::Destroy;
+use crate::backend::resources::Buffer;
 use crate::error::{Result, VkContext};
-use crate::guard::Destroy;
-use crate::resources::Buffer;
 
 /// Specialization constant values: word `i` is the 32-bit value of `constant_id = i`.
 pub type Specialization = Vec<u32>;

@@ -7,10 +7,10 @@
 
 use ash::vk;
 
-use crate::context::Context;
+use crate::backend::context::Context;
+use crate::backend::guard::Destroy;
+use crate::backend::resources::{Buffer, Image};
 use crate::error::{Result, VkContext};
-use crate::guard::Destroy;
-use crate::resources::{Buffer, Image};
 
 /// A resource bound at the binding with the same index as its position in the list.
 pub enum Bind<'a> {

@@ -9,9 +9,9 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocator, AllocatorCreateDesc};
 use gpu_allocator::AllocatorDebugSettings;
 
-use crate::device_info::DeviceInfo;
+use crate::backend::device_info::DeviceInfo;
+use crate::backend::validation::{messenger_info, Validation, ValidationLog};
 use crate::error::{Error, Result, VkContext};
-use crate::validation::{messenger_info, Validation, ValidationLog};
 
 /// The Vulkan API version rrf is written against (dynamic rendering is core in 1.3).
 pub const API_VERSION: u32 = vk::API_VERSION_1_3;

@@ -7,10 +7,9 @@ use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
 
-use crate::context::Context;
+use crate::backend::context::Context;
+use crate::backend::guard::Destroy;
 use crate::error::{Error, Result, VkContext};
-use crate::guard::Destroy;
-use crate::sync::{Access, Pass, Use};
 
 pub struct Buffer {
     pub raw: vk::Buffer,
@@ -390,18 +389,6 @@ pub fn copy_to_buffer(ctx: &Context, cmd: vk::CommandBuffer, image: &Image, buff
             &[copy_region(image)],
         )
     };
-}
-
-/// The passes that copy `image` into `buffer` and make the copy visible to the host, for a
-/// frame list.
-pub fn read_back_passes<'a>(ctx: &'a Context, image: &'a Image, buffer: &'a Buffer) -> [Pass<'a>; 2] {
-    let copy = Pass::new(
-        "read-back copy",
-        vec![Use::image(image, Access::TRANSFER_READ), Use::buffer(buffer, Access::TRANSFER_WRITE)],
-        move |cmd| copy_to_buffer(ctx, cmd, image, buffer),
-    );
-    let host = Pass::new("read-back to host", vec![Use::buffer(buffer, Access::HOST_READ)], |_| {});
-    [copy, host]
 }
 
 fn aspect_of(format: vk::Format) -> vk::ImageAspectFlags {

@@ -2,12 +2,12 @@
 
 use ash::vk;
 
-use crate::compute::{Bind, ComputePass};
-use crate::context::Context;
+use crate::backend::compute::{Bind, ComputePass};
+use crate::backend::context::Context;
+use crate::backend::guard::Destroy;
+use crate::backend::resources::Image;
+use crate::backend::sync::{Access, Pass, Use};
 use crate::error::Result;
-use crate::guard::Destroy;
-use crate::resources::Image;
-use crate::sync::{Access, Pass, Use};
 
 /// ACES filmic curve, Narkowicz's fit.
 pub fn aces_fitted(x: f32) -> f32 {

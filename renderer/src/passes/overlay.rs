@@ -5,12 +5,12 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use gpu_allocator::MemoryLocation;
 
-use crate::compute::{Bind, ComputePass};
-use crate::context::Context;
+use crate::backend::compute::{Bind, ComputePass};
+use crate::backend::context::Context;
+use crate::backend::guard::Destroy;
+use crate::backend::resources::{Buffer, Image};
+use crate::backend::sync::{Access, Pass, Use};
 use crate::error::Result;
-use crate::guard::Destroy;
-use crate::resources::{Buffer, Image};
-use crate::sync::{Access, Pass, Use};
 
 /// Characters per line and lines of the overlay.
 pub const COLUMNS: u32 = 96;

@@ -10,8 +10,8 @@ use std::collections::HashMap;
 
 use ash::vk;
 
-use crate::context::Context;
-use crate::resources::{Buffer, Image};
+use crate::backend::context::Context;
+use crate::backend::resources::{copy_to_buffer, Buffer, Image};
 
 /// How a pass touches a resource: the stages and access kinds, and for images the layout.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -332,6 +332,18 @@ pub fn run_passes(ctx: &Context, cmd: vk::CommandBuffer, states: &mut ResourceSt
             unsafe { ctx.device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, pool, query) };
         }
     }
+}
+
+/// The passes that copy `image` into `buffer` and make the copy visible to the host, for a
+/// frame list.
+pub fn read_back_passes<'a>(ctx: &'a Context, image: &'a Image, buffer: &'a Buffer) -> [Pass<'a>; 2] {
+    let copy = Pass::new(
+        "read-back copy",
+        vec![Use::image(image, Access::TRANSFER_READ), Use::buffer(buffer, Access::TRANSFER_WRITE)],
+        move |cmd| copy_to_buffer(ctx, cmd, image, buffer),
+    );
+    let host = Pass::new("read-back to host", vec![Use::buffer(buffer, Access::HOST_READ)], |_| {});
+    [copy, host]
 }
 
 #[cfg(test)]

@@ -1,0 +1,10 @@
+//! The passes of a frame, in the order they run: the shadow maps and the G-buffer (both
+//! rasterised), the network pass, the tonemap and the text overlay.
+
+pub mod gbuffer;
+pub mod mesh;
+pub mod network;
+pub mod overlay;
+pub mod raster;
+pub mod shadow;
+pub mod tonemap;

@@ -1,0 +1,140 @@
+//! The raster pipeline builder and depth attachment that the G-buffer and shadow passes share.
+
+use ash::vk;
+
+use crate::backend::context::Context;
+use crate::backend::resources::Image;
+use crate::error::{Result, VkContext};
+use crate::passes::mesh::GBufferVertex;
+
+/// The depth buffer of the passes that rasterise the mesh (G-buffer, shadow maps).
+pub(crate) const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+
+/// The depth attachment of a pass that rasterises the mesh: `depth` ([`DEPTH_FORMAT`]),
+/// cleared to the far plane, not stored.
+pub(crate) fn cleared_depth(depth: &Image) -> vk::RenderingAttachmentInfo<'static> {
+    vk::RenderingAttachmentInfo::default()
+        .image_view(depth.view)
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(vk::AttachmentStoreOp::DONT_CARE)
+        .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } })
+}
+
+/// A graphics pipeline that rasterises the scene mesh ([`GBufferVertex`]) with depth testing,
+/// for the G-buffer and shadow passes.
+pub(crate) struct Raster<'a> {
+    pub vertex: &'a [u32],
+    pub fragment: &'a [u32],
+    /// The vertex attributes the shaders read, from one binding of `GBufferVertex`s.
+    pub attributes: &'a [vk::VertexInputAttributeDescription],
+    pub color_formats: &'a [vk::Format],
+    pub depth_format: vk::Format,
+}
+
+impl Raster<'_> {
+    /// One pipeline per value of specialization constant 0, with `layout`. No face culling;
+    /// viewport and scissor are dynamic. The caller destroys the pipelines.
+    pub(crate) fn pipelines(
+        &self,
+        ctx: &Context,
+        layout: vk::PipelineLayout,
+        values: &[u32],
+    ) -> Result<Vec<vk::Pipeline>> {
+        let device = &ctx.device;
+        ctx.step("vkCreateGraphicsPipelines")?;
+        // SAFETY: valid create infos that outlive the calls; the modules are destroyed here.
+        unsafe {
+            let module = |code| device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None);
+            let vs = module(self.vertex).vk("vkCreateShaderModule")?;
+            let fs = match module(self.fragment) {
+                Ok(fs) => fs,
+                Err(e) => {
+                    device.destroy_shader_module(vs, None);
+                    return Err(e).vk("vkCreateShaderModule");
+                }
+            };
+            let stages = [
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::VERTEX)
+                    .module(vs)
+                    .name(c"main"),
+                vk::PipelineShaderStageCreateInfo::default()
+                    .stage(vk::ShaderStageFlags::FRAGMENT)
+                    .module(fs)
+                    .name(c"main"),
+            ];
+            let bindings = [vk::VertexInputBindingDescription::default()
+                .binding(0)
+                .stride(std::mem::size_of::<GBufferVertex>() as u32)
+                .input_rate(vk::VertexInputRate::VERTEX)];
+            let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+                .vertex_binding_descriptions(&bindings)
+                .vertex_attribute_descriptions(self.attributes);
+            let assembly =
+                vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+            let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+            // The projection's y flip and Vulkan's y-down framebuffer cancel: front faces are
+            // counter-clockwise on screen, as in the scene.
+            let raster = vk::PipelineRasterizationStateCreateInfo::default()
+                .polygon_mode(vk::PolygonMode::FILL)
+                .cull_mode(vk::CullModeFlags::NONE)
+                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+                .line_width(1.0);
+            let multisample =
+                vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+            let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+                .depth_test_enable(true)
+                .depth_write_enable(true)
+                .depth_compare_op(vk::CompareOp::LESS);
+            let blend = vec![
+                vk::PipelineColorBlendAttachmentState::default()
+                    .color_write_mask(vk::ColorComponentFlags::RGBA);
+                self.color_formats.len()
+            ];
+            let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
+            let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+            let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+            let mut rendering = vk::PipelineRenderingCreateInfo::default()
+                .color_attachment_formats(self.color_formats)
+                .depth_attachment_format(self.depth_format);
+            let info = vk::GraphicsPipelineCreateInfo::default()
+                .vertex_input_state(&vertex_input)
+                .input_assembly_state(&assembly)
+                .viewport_state(&viewport)
+                .rasterization_state(&raster)
+                .multisample_state(&multisample)
+                .depth_stencil_state(&depth)
+                .color_blend_state(&blending)
+                .dynamic_state(&dynamic)
+                .layout(layout)
+                .push_next(&mut rendering);
+            let mut pipelines = Vec::with_capacity(values.len());
+            let mut created = Ok(());
+            for &value in values {
+                let value = [value];
+                let entries = [vk::SpecializationMapEntry { constant_id: 0, offset: 0, size: 4 }];
+                let specialization =
+                    vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(&value));
+                let mut stages = stages;
+                stages[1] = stages[1].specialization_info(&specialization);
+                match device.create_graphics_pipelines(vk::PipelineCache::null(), &[info.stages(&stages)], None) {
+                    Ok(p) => pipelines.push(p[0]),
+                    Err((_, e)) => {
+                        created = Err(e);
+                        break;
+                    }
+                }
+            }
+            device.destroy_shader_module(vs, None);
+            device.destroy_shader_module(fs, None);
+            if let Err(e) = created {
+                for p in pipelines {
+                    device.destroy_pipeline(p, None);
+                }
+                return Err(e).vk("vkCreateGraphicsPipelines");
+            }
+            Ok(pipelines)
+        }
+    }
+}
