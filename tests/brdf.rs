@@ -8,8 +8,8 @@ use rrf::shaders;
 use rrf_baker::glam::Vec3;
 use rrf_baker::trace::bsdf::Bsdf;
 use rrf_baker::trace::sampling::{Frame, Rng};
-use rrf_renderer::compute::{Bind, ComputePass};
-use rrf_renderer::sync::{run_passes, Access, Pass, ResourceStates, Use};
+use rrf_renderer::backend::compute::{Bind, ComputePass};
+use rrf_renderer::backend::sync::{run_passes, Access, Pass, ResourceStates, Use};
 use rrf_renderer::{vk, MemoryLocation};
 
 const CASES: usize = 4096;

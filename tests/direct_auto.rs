@@ -6,7 +6,7 @@ use std::path::Path;
 
 use rrf::gpu_frame::Direct;
 use rrf_baker::scene::Scene;
-use rrf_renderer::network_pass::Variant;
+use rrf_renderer::passes::network::Variant;
 
 fn scene(name: &str) -> Scene {
     Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).unwrap()

@@ -10,7 +10,8 @@ use rrf::shaders;
 use rrf_baker::glam::{Vec2, Vec3};
 use rrf_baker::scene::Scene;
 use rrf_baker::trace::{Camera, Geometry, World};
-use rrf_renderer::gbuffer::{GBufferMesh, GBufferPass, GBufferTargets, GBufferTexel};
+use rrf_renderer::passes::gbuffer::{GBufferPass, GBufferTargets, GBufferTexel};
+use rrf_renderer::passes::mesh::GBufferMesh;
 use rrf_renderer::vk;
 
 fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {

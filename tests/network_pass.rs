@@ -13,8 +13,8 @@ use rrf_baker::network::Component;
 use rrf_baker::predict::predict_image;
 use rrf_baker::scene::{PlacedLight, Scene};
 use rrf_baker::trace::{Camera, Geometry, Radiance, World};
-use rrf_renderer::network_pass::Variant;
-use rrf_renderer::tonemap::tonemap;
+use rrf_renderer::passes::network::Variant;
+use rrf_renderer::passes::tonemap::tonemap;
 use rrf_renderer::vk;
 
 /// One component of the CPU's radiance.
@@ -99,7 +99,7 @@ fn compare_with(
 }
 
 /// Texels per side of a shadow map's cube face.
-const SHADOW_SIZE: f32 = rrf_renderer::shadow::SHADOW_SIZE as f32;
+const SHADOW_SIZE: f32 = rrf_renderer::passes::shadow::SHADOW_SIZE as f32;
 
 /// Pixels where a cube shadow map cannot say whether the surface is lit: those whose point,
 /// moved off its surface by a texel as the GPU moves it, is nearer to the light than the first

@@ -12,7 +12,7 @@ use rrf_baker::network::Component;
 use rrf_baker::partition::BlendBox;
 use rrf_baker::scene::Scene;
 use rrf_baker::trace::sampling::Rng;
-use rrf_renderer::network_pass::LeafBlend;
+use rrf_renderer::passes::network::LeafBlend;
 
 #[test]
 fn units_weigh_each_objects_leaves_as_the_cpu_does() {

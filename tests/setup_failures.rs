@@ -11,7 +11,7 @@ use common::{finish_clean, gpu};
 use rrf::gpu_frame::{Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
-use rrf_renderer::network_pass::Variant;
+use rrf_renderer::passes::network::Variant;
 use rrf_renderer::vk;
 
 fn cornell_box() -> (Scene, Model) {

@@ -22,7 +22,7 @@ use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::scene::{PlacedLight, Scene};
 use rrf_baker::trace::{render, Camera, Footprint, Geometry, RenderSettings, TraceSettings, World};
-use rrf_renderer::network_pass::Variant;
+use rrf_renderer::passes::network::Variant;
 use rrf_renderer::vk;
 
 const SIZE: u32 = 64;

@@ -5,7 +5,7 @@ mod common;
 
 use common::{finish_clean, gpu};
 use rrf::shaders;
-use rrf_renderer::tonemap::{tonemap, TonemapPass};
+use rrf_renderer::passes::tonemap::{tonemap, TonemapPass};
 use rrf_renderer::vk;
 
 #[test]
