@@ -3,6 +3,8 @@
 //! It knows nothing of glTF or path tracing: scenes arrive as plain arrays and shaders as
 //! SPIR-V words compiled by the root crate's build script.
 
+#![deny(clippy::undocumented_unsafe_blocks)]
+
 pub mod backend;
 pub mod error;
 pub mod lights;

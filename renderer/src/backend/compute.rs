@@ -64,33 +64,27 @@ impl ComputePass {
             ctx.guard(ComputePass { pipelines: Vec::new(), layout: vk::PipelineLayout::null(), set: None, workgroup });
         let set = pass.set.insert(BoundSet::new(ctx, name, bindings, vk::ShaderStageFlags::COMPUTE)?);
         let set_layouts = [set.layout];
-        // SAFETY: all create infos are valid and outlive their calls; every object is
-        // destroyed by `destroy`.
-        unsafe {
-            let push = [vk::PushConstantRange::default()
-                .stage_flags(vk::ShaderStageFlags::COMPUTE)
-                .offset(0)
-                .size(push_bytes)];
-            let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-            if push_bytes > 0 {
-                layout_info = layout_info.push_constant_ranges(&push);
-            }
-            pass.layout = device.create_pipeline_layout(&layout_info, None).vk("vkCreatePipelineLayout")?;
-
-            ctx.step("vkCreateComputePipelines")?;
-            let module = device
-                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(spirv), None)
-                .vk("vkCreateShaderModule")?;
-            let pipelines = create_pipelines(device, module, pass.layout, specializations);
-            device.destroy_shader_module(module, None);
-            pass.pipelines = pipelines?;
-
-            for (i, &pipeline) in pass.pipelines.iter().enumerate() {
-                let label = if pass.pipelines.len() > 1 { format!("{name} #{i}") } else { name.to_string() };
-                ctx.set_name(pipeline, &label);
-            }
-            ctx.set_name(pass.layout, name);
+        let push =
+            [vk::PushConstantRange::default().stage_flags(vk::ShaderStageFlags::COMPUTE).offset(0).size(push_bytes)];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if push_bytes > 0 {
+            layout_info = layout_info.push_constant_ranges(&push);
         }
+        // SAFETY: the create info outlives the call; `destroy` destroys the layout.
+        pass.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
+
+        ctx.step("vkCreateComputePipelines")?;
+        let module = ctx.create_shader_module(spirv)?;
+        // SAFETY: the module and the layout belong to this device.
+        let pipelines = unsafe { create_pipelines(device, module, pass.layout, specializations) };
+        ctx.destroy_shader_module(module);
+        pass.pipelines = pipelines?;
+
+        for (i, &pipeline) in pass.pipelines.iter().enumerate() {
+            let label = if pass.pipelines.len() > 1 { format!("{name} #{i}") } else { name.to_string() };
+            ctx.set_name(pipeline, &label);
+        }
+        ctx.set_name(pass.layout, name);
         Ok(pass.keep())
     }
 

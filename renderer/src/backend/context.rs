@@ -83,6 +83,40 @@ struct Debug {
     messenger: vk::DebugUtilsMessengerEXT,
 }
 
+/// What `Context::new` has made so far; dropped, it destroys them, children first, so that a
+/// failed creation leaks nothing. [`Partial::keep`] hands them over to the context.
+struct Partial {
+    instance: ash::Instance,
+    messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,
+    device: Option<ash::Device>,
+    command_pool: vk::CommandPool,
+}
+
+impl Partial {
+    /// Keeps everything alive (the context owns it now) and returns the messenger.
+    fn keep(self) -> Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)> {
+        let mut this = ManuallyDrop::new(self);
+        this.messenger.take()
+    }
+}
+
+impl Drop for Partial {
+    fn drop(&mut self) {
+        // SAFETY: `Context::new` made each handle and nothing else was created from them; each
+        // is destroyed once, children before parents. Null handles are ignored.
+        unsafe {
+            if let Some(device) = &self.device {
+                device.destroy_command_pool(self.command_pool, None);
+                device.destroy_device(None);
+            }
+            if let Some((fns, messenger)) = &self.messenger {
+                fns.destroy_debug_utils_messenger(*messenger, None);
+            }
+            self.instance.destroy_instance(None);
+        }
+    }
+}
+
 impl Context {
     pub fn new(options: &ContextOptions) -> Result<Self> {
         // SAFETY: loading the Vulkan loader runs its initialisation code; nothing else is
@@ -107,10 +141,12 @@ impl Context {
             Validation::Required => true,
         };
 
+        // SAFETY: plain enumeration queries on a loaded entry.
         let mut available = unsafe { entry.enumerate_instance_extension_properties(None) }
             .vk("vkEnumerateInstanceExtensionProperties")?;
         if use_validation {
             available.extend(
+                // SAFETY: as above, for a layer the loader listed.
                 unsafe { entry.enumerate_instance_extension_properties(Some(VALIDATION_LAYER)) }
                     .vk("vkEnumerateInstanceExtensionProperties")?,
             );
@@ -155,30 +191,18 @@ impl Context {
             result => Error::Vulkan { call: "vkCreateInstance", result },
         })?;
 
-        let debug_instance = has_debug_utils.then(|| ash::ext::debug_utils::Instance::new(&entry, &instance));
-        let messenger = match &debug_instance {
+        // From here on, an early return destroys what was made (`Partial`'s drop).
+        let mut made = Partial { instance, messenger: None, device: None, command_pool: vk::CommandPool::null() };
+        let instance = made.instance.clone();
+        if has_debug_utils {
+            let fns = ash::ext::debug_utils::Instance::new(&entry, &instance);
             // SAFETY: the callback's user data (the boxed log) outlives the messenger.
-            Some(d) => Some(
-                unsafe { d.create_debug_utils_messenger(&messenger_info(&validation), None) }
-                    .vk("vkCreateDebugUtilsMessengerEXT")?,
-            ),
-            None => None,
-        };
+            let messenger = unsafe { fns.create_debug_utils_messenger(&messenger_info(&validation), None) }
+                .vk("vkCreateDebugUtilsMessengerEXT")?;
+            made.messenger = Some((fns, messenger));
+        }
 
-        let selected = select_device(&instance, options.device.as_deref());
-        let (physical_device, queue_family) = match selected {
-            Ok(found) => found,
-            Err(e) => {
-                // SAFETY: nothing was created from the instance but the messenger.
-                unsafe {
-                    if let (Some(d), Some(m)) = (&debug_instance, messenger) {
-                        d.destroy_debug_utils_messenger(m, None);
-                    }
-                    instance.destroy_instance(None);
-                }
-                return Err(e);
-            }
-        };
+        let (physical_device, queue_family) = select_device(&instance, options.device.as_deref())?;
         let info = DeviceInfo::query(&instance, physical_device, use_validation);
 
         let device_extensions: Vec<*const c_char> = options.device_extensions.iter().map(|e| e.as_ptr()).collect();
@@ -194,12 +218,16 @@ impl Context {
             .push_next(&mut vulkan13);
         // SAFETY: the physical device came from this instance; the create info outlives the call.
         let device = unsafe { instance.create_device(physical_device, &device_info, None) }.vk("vkCreateDevice")?;
+        made.device = Some(device.clone());
+        // SAFETY: the device was created with one queue of this family.
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(queue_family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        // SAFETY: the create info outlives the call.
         let command_pool = unsafe { device.create_command_pool(&pool_info, None) }.vk("vkCreateCommandPool")?;
+        made.command_pool = command_pool;
 
         // Leaks are reported by name in `finish`, not logged by the allocator.
         let mut debug_settings = AllocatorDebugSettings::default();
@@ -214,14 +242,11 @@ impl Context {
         })
         .map_err(|source| Error::Allocation { name: "allocator".into(), bytes: 0, source })?;
 
-        let debug = match (debug_instance, messenger) {
-            (Some(instance_fns), Some(messenger)) => Some(Debug {
-                device: ash::ext::debug_utils::Device::new(&instance, &device),
-                instance: instance_fns,
-                messenger,
-            }),
-            _ => None,
-        };
+        let debug = made.keep().map(|(instance_fns, messenger)| Debug {
+            device: ash::ext::debug_utils::Device::new(&instance, &device),
+            instance: instance_fns,
+            messenger,
+        });
 
         let context = Self {
             entry,
@@ -324,19 +349,28 @@ impl Context {
         let cmd = unsafe { self.device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
         let result = (|| {
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+            // SAFETY: `cmd` is a fresh primary command buffer of this device.
             unsafe { self.device.begin_command_buffer(cmd, &begin) }.vk("vkBeginCommandBuffer")?;
             let value = record(cmd);
+            // SAFETY: `cmd` is recording, and `record` left no render pass or query open.
             unsafe { self.device.end_command_buffer(cmd) }.vk("vkEndCommandBuffer")?;
+            // SAFETY: a plain fence of this device.
             let fence =
                 unsafe { self.device.create_fence(&vk::FenceCreateInfo::default(), None) }.vk("vkCreateFence")?;
             let cmds = [cmd];
             let submit = [vk::SubmitInfo::default().command_buffers(&cmds)];
+            // SAFETY: the queue is used from one thread at a time; `cmd` is executable and
+            // the fence unsignalled.
             let waited = unsafe { self.device.queue_submit(self.queue, &submit, fence) }
                 .vk("vkQueueSubmit")
+                // SAFETY: the fence was just submitted with the work.
                 .and_then(|()| unsafe { self.device.wait_for_fences(&[fence], true, u64::MAX) }.vk("vkWaitForFences"));
+            // SAFETY: the fence's work finished, or was never submitted.
             unsafe { self.device.destroy_fence(fence, None) };
             waited.map(|()| value)
         })();
+        // SAFETY: the buffer's work finished (the fence was waited for) or never started; a
+        // failed wait is a lost device, where freeing is still allowed.
         unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
         result
     }
@@ -387,6 +421,7 @@ fn select_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<(vk::
         return Err(Error::NoDevice);
     }
     let named: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties)> =
+        // SAFETY: a property query on a device the instance listed.
         devices.iter().map(|&d| (d, unsafe { instance.get_physical_device_properties(d) })).collect();
     let name_of = |p: &vk::PhysicalDeviceProperties| {
         p.device_name_as_c_str().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()

@@ -131,6 +131,7 @@ impl Context {
         self.step("vkCreateBuffer")?;
         // SAFETY: valid create info; the buffer is bound to memory before use.
         let raw = unsafe { self.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
+        // SAFETY: a query on the buffer just made.
         let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
         let allocation = self
             .allocator()
@@ -142,19 +143,36 @@ impl Context {
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
             .map_err(|source| {
+                // SAFETY: the buffer has no memory and no user yet.
                 unsafe { self.device.destroy_buffer(raw, None) };
                 Error::Allocation { name: name.to_string(), bytes: requirements.size, source }
             })?;
         let buffer = Buffer { raw, size, allocation };
-        // SAFETY: the allocation was made for this buffer's requirements.
         if let Err(e) =
-            unsafe { self.device.bind_buffer_memory(raw, buffer.allocation.memory(), buffer.allocation.offset()) }
+            // SAFETY: the allocation was made for this buffer's requirements.
+            unsafe {
+                self.device.bind_buffer_memory(raw, buffer.allocation.memory(), buffer.allocation.offset())
+            }
         {
             self.destroy_buffer(buffer);
             return Err(e).vk("vkBindBufferMemory");
         }
         self.set_name(raw, name);
         Ok(buffer)
+    }
+
+    /// A shader module of `spirv` (the build script's glslang output), for making pipelines;
+    /// destroy it with [`Context::destroy_shader_module`] once they are made.
+    pub(crate) fn create_shader_module(&self, spirv: &[u32]) -> Result<vk::ShaderModule> {
+        let info = vk::ShaderModuleCreateInfo::default().code(spirv);
+        // SAFETY: the create info outlives the call; the words are glslang's validated SPIR-V.
+        unsafe { self.device.create_shader_module(&info, None) }.vk("vkCreateShaderModule")
+    }
+
+    /// Destroys a module made by [`Context::create_shader_module`].
+    pub(crate) fn destroy_shader_module(&self, module: vk::ShaderModule) {
+        // SAFETY: pipelines made from a module do not need it afterwards; null is ignored.
+        unsafe { self.device.destroy_shader_module(module, None) };
     }
 
     pub fn destroy_buffer(&self, buffer: Buffer) {
@@ -227,6 +245,7 @@ impl Context {
         self.step("vkCreateImage")?;
         // SAFETY: valid create info; memory is bound before the view is made.
         let raw = unsafe { self.device.create_image(&info, None) }.vk("vkCreateImage")?;
+        // SAFETY: a query on the image just made.
         let requirements = unsafe { self.device.get_image_memory_requirements(raw) };
         let allocation = self
             .allocator()
@@ -238,6 +257,7 @@ impl Context {
                 allocation_scheme: AllocationScheme::GpuAllocatorManaged,
             })
             .map_err(|source| {
+                // SAFETY: the image has no memory and no user yet.
                 unsafe { self.device.destroy_image(raw, None) };
                 Error::Allocation { name: name.to_string(), bytes: requirements.size, source }
             })?;
@@ -256,6 +276,7 @@ impl Context {
                 .view_type(vk::ImageViewType::TYPE_2D)
                 .format(format)
                 .subresource_range(full_range(aspect_of(format)));
+            // SAFETY: the image is bound to memory; its usage allows a view of this format.
             image.view = unsafe { self.device.create_image_view(&view_info, None) }.vk("vkCreateImageView")?;
             self.set_name(image.view, name);
         }

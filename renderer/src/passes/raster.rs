@@ -41,100 +41,96 @@ impl Raster<'_> {
         layout: vk::PipelineLayout,
         values: &[u32],
     ) -> Result<Vec<vk::Pipeline>> {
-        let device = &ctx.device;
         ctx.step("vkCreateGraphicsPipelines")?;
-        // SAFETY: valid create infos that outlive the calls; the modules are destroyed here.
-        unsafe {
-            let module = |code| device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None);
-            let vs = module(self.vertex).vk("vkCreateShaderModule")?;
-            let fs = match module(self.fragment) {
-                Ok(fs) => fs,
-                Err(e) => {
-                    device.destroy_shader_module(vs, None);
-                    return Err(e).vk("vkCreateShaderModule");
-                }
-            };
-            let stages = [
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::VERTEX)
-                    .module(vs)
-                    .name(c"main"),
-                vk::PipelineShaderStageCreateInfo::default()
-                    .stage(vk::ShaderStageFlags::FRAGMENT)
-                    .module(fs)
-                    .name(c"main"),
-            ];
-            let bindings = [vk::VertexInputBindingDescription::default()
-                .binding(0)
-                .stride(std::mem::size_of::<GBufferVertex>() as u32)
-                .input_rate(vk::VertexInputRate::VERTEX)];
-            let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
-                .vertex_binding_descriptions(&bindings)
-                .vertex_attribute_descriptions(self.attributes);
-            let assembly =
-                vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
-            let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
-            // The projection's y flip and Vulkan's y-down framebuffer cancel: front faces are
-            // counter-clockwise on screen, as in the scene.
-            let raster = vk::PipelineRasterizationStateCreateInfo::default()
-                .polygon_mode(vk::PolygonMode::FILL)
-                .cull_mode(vk::CullModeFlags::NONE)
-                .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
-                .line_width(1.0);
-            let multisample =
-                vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
-            let depth = vk::PipelineDepthStencilStateCreateInfo::default()
-                .depth_test_enable(true)
-                .depth_write_enable(true)
-                .depth_compare_op(vk::CompareOp::LESS);
-            let blend = vec![
-                vk::PipelineColorBlendAttachmentState::default()
-                    .color_write_mask(vk::ColorComponentFlags::RGBA);
-                self.color_formats.len()
-            ];
-            let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
-            let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
-            let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
-            let mut rendering = vk::PipelineRenderingCreateInfo::default()
-                .color_attachment_formats(self.color_formats)
-                .depth_attachment_format(self.depth_format);
-            let info = vk::GraphicsPipelineCreateInfo::default()
-                .vertex_input_state(&vertex_input)
-                .input_assembly_state(&assembly)
-                .viewport_state(&viewport)
-                .rasterization_state(&raster)
-                .multisample_state(&multisample)
-                .depth_stencil_state(&depth)
-                .color_blend_state(&blending)
-                .dynamic_state(&dynamic)
-                .layout(layout)
-                .push_next(&mut rendering);
-            let mut pipelines = Vec::with_capacity(values.len());
-            let mut created = Ok(());
-            for &value in values {
-                let value = [value];
-                let entries = [vk::SpecializationMapEntry { constant_id: 0, offset: 0, size: 4 }];
-                let specialization =
-                    vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(&value));
-                let mut stages = stages;
-                stages[1] = stages[1].specialization_info(&specialization);
-                match device.create_graphics_pipelines(vk::PipelineCache::null(), &[info.stages(&stages)], None) {
-                    Ok(p) => pipelines.push(p[0]),
-                    Err((_, e)) => {
-                        created = Err(e);
-                        break;
+        let vs = ctx.create_shader_module(self.vertex)?;
+        let created = ctx.create_shader_module(self.fragment).and_then(|fs| {
+            let pipelines = self.create(ctx, layout, values, [vs, fs]);
+            ctx.destroy_shader_module(fs);
+            pipelines
+        });
+        ctx.destroy_shader_module(vs);
+        created
+    }
+
+    /// The pipelines of [`Raster::pipelines`] from the vertex and fragment `modules`.
+    fn create(
+        &self,
+        ctx: &Context,
+        layout: vk::PipelineLayout,
+        values: &[u32],
+        [vs, fs]: [vk::ShaderModule; 2],
+    ) -> Result<Vec<vk::Pipeline>> {
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
+        ];
+        let bindings = [vk::VertexInputBindingDescription::default()
+            .binding(0)
+            .stride(std::mem::size_of::<GBufferVertex>() as u32)
+            .input_rate(vk::VertexInputRate::VERTEX)];
+        let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+            .vertex_binding_descriptions(&bindings)
+            .vertex_attribute_descriptions(self.attributes);
+        let assembly =
+            vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
+        let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
+        // The projection's y flip and Vulkan's y-down framebuffer cancel: front faces are
+        // counter-clockwise on screen, as in the scene.
+        let raster = vk::PipelineRasterizationStateCreateInfo::default()
+            .polygon_mode(vk::PolygonMode::FILL)
+            .cull_mode(vk::CullModeFlags::NONE)
+            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
+            .line_width(1.0);
+        let multisample =
+            vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
+        let depth = vk::PipelineDepthStencilStateCreateInfo::default()
+            .depth_test_enable(true)
+            .depth_write_enable(true)
+            .depth_compare_op(vk::CompareOp::LESS);
+        let blend = vec![
+            vk::PipelineColorBlendAttachmentState::default()
+                .color_write_mask(vk::ColorComponentFlags::RGBA);
+            self.color_formats.len()
+        ];
+        let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
+        let mut rendering = vk::PipelineRenderingCreateInfo::default()
+            .color_attachment_formats(self.color_formats)
+            .depth_attachment_format(self.depth_format);
+        let info = vk::GraphicsPipelineCreateInfo::default()
+            .vertex_input_state(&vertex_input)
+            .input_assembly_state(&assembly)
+            .viewport_state(&viewport)
+            .rasterization_state(&raster)
+            .multisample_state(&multisample)
+            .depth_stencil_state(&depth)
+            .color_blend_state(&blending)
+            .dynamic_state(&dynamic)
+            .layout(layout)
+            .push_next(&mut rendering);
+        let mut pipelines = Vec::with_capacity(values.len());
+        for &value in values {
+            let value = [value];
+            let entries = [vk::SpecializationMapEntry { constant_id: 0, offset: 0, size: 4 }];
+            let specialization =
+                vk::SpecializationInfo::default().map_entries(&entries).data(bytemuck::cast_slice(&value));
+            let mut stages = stages;
+            stages[1] = stages[1].specialization_info(&specialization);
+            let info = [info.stages(&stages)];
+            // SAFETY: the create info and everything it points to outlive the call; the modules
+            // and the layout belong to this device.
+            match unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) } {
+                Ok(p) => pipelines.push(p[0]),
+                Err((_, e)) => {
+                    for p in pipelines {
+                        // SAFETY: made above and never used.
+                        unsafe { ctx.device.destroy_pipeline(p, None) };
                     }
+                    return Err(e).vk("vkCreateGraphicsPipelines");
                 }
             }
-            device.destroy_shader_module(vs, None);
-            device.destroy_shader_module(fs, None);
-            if let Err(e) = created {
-                for p in pipelines {
-                    device.destroy_pipeline(p, None);
-                }
-                return Err(e).vk("vkCreateGraphicsPipelines");
-            }
-            Ok(pipelines)
         }
+        Ok(pipelines)
     }
 }
