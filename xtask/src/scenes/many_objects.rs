@@ -254,11 +254,11 @@ eye = [0.5, 1.4, 1.5]
 target = [-3.0, 1.0, -1.2]
 fov_y = 55.0
 
-# Two 256-spp references differ by 0.064 FLIP here, four fifths of the 0.08 target; at 2048 spp
-# by 0.031, two fifths (BENCHMARKS.md, "many-objects against 2048-spp references"). The first
-# eval path-traces for about 50 minutes on two cores; later ones read the cached references.
+# Two 256-spp references differ by 0.064 FLIP here, four fifths of the 0.08 target; at 3584 spp
+# by 0.026, a third (BENCHMARKS.md, "many-objects against 3584-spp references"). The first eval
+# path-traces for about 70 minutes on two cores; later ones read the cached references.
 [eval]
-spp = 2048
+spp = 3584
 "#
     .to_string();
     (b, sidecar)
