@@ -3,9 +3,8 @@
 
 use std::time::Instant;
 
+use rrf_renderer::frame::TIMED_PASSES;
 use serde_json::json;
-
-use crate::gpu_frame::TIMED_PASSES;
 
 /// Frames the overlay's figures average over.
 const RECENT: usize = 30;

@@ -5,13 +5,14 @@
 //! (Vulkan). This crate owns the compiled shaders and hands them to the renderer.
 
 pub mod commands;
+pub mod direct_mode;
 pub mod eval;
 pub mod frame_stats;
-pub mod gpu_frame;
 pub mod gpu_scene;
 pub mod image_out;
 pub mod lights;
 pub mod parse;
 pub mod progress;
+pub mod scene_frame;
 pub mod shaders;
 pub mod viewer;

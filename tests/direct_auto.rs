@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use rrf::gpu_frame::Direct;
+use rrf::direct_mode::DirectMode;
 use rrf_baker::scene::Scene;
 use rrf_renderer::passes::network::Variant;
 
@@ -15,18 +15,18 @@ fn scene(name: &str) -> Scene {
 #[test]
 fn auto_picks_analytic_for_a_lone_point_light_and_learned_elsewhere() {
     let cases = [
-        ("cornell-box", "an area light", Direct::Learned),
-        ("glossy-room", "an area light", Direct::Learned),
-        ("gallery", "a spot light beside an emissive screen", Direct::Learned),
-        ("many-objects", "a point light alone", Direct::Analytic),
+        ("cornell-box", "an area light", DirectMode::Learned),
+        ("glossy-room", "an area light", DirectMode::Learned),
+        ("gallery", "a spot light beside an emissive screen", DirectMode::Learned),
+        ("many-objects", "a point light alone", DirectMode::Analytic),
     ];
     for (name, lights, expected) in cases {
         let scene = scene(name);
         for variant in [Some(Variant::Tiled), Some(Variant::PerObject), None] {
-            assert_eq!(Direct::Auto.resolve(&scene, variant), expected, "{name} ({lights}), {variant:?}");
+            assert_eq!(DirectMode::Auto.resolve(&scene, variant), expected, "{name} ({lights}), {variant:?}");
         }
-        assert_eq!(Direct::Auto.resolve(&scene, Some(Variant::Storage)), Direct::Learned, "{name}: storage");
-        for chosen in [Direct::Learned, Direct::Analytic] {
+        assert_eq!(DirectMode::Auto.resolve(&scene, Some(Variant::Storage)), DirectMode::Learned, "{name}: storage");
+        for chosen in [DirectMode::Learned, DirectMode::Analytic] {
             assert_eq!(chosen.resolve(&scene, Some(Variant::Tiled)), chosen, "{name}: an explicit mode stays");
         }
     }

@@ -6,13 +6,15 @@ mod common;
 use std::path::Path;
 
 use common::{finish_clean, gpu};
-use rrf::gpu_frame::{Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
+use rrf::direct_mode::DirectMode;
+use rrf::scene_frame::{FrameSettings, SceneFrame};
 use rrf_baker::glam::{Vec2, Vec3};
 use rrf_baker::model::Model;
 use rrf_baker::network::Component;
 use rrf_baker::predict::predict_image;
 use rrf_baker::scene::{PlacedLight, Scene};
 use rrf_baker::trace::{Camera, Geometry, Radiance, World};
+use rrf_renderer::frame::{FrameOutput, Shown};
 use rrf_renderer::passes::network::Variant;
 use rrf_renderer::passes::tonemap::tonemap;
 use rrf_renderer::vk;
@@ -26,7 +28,7 @@ fn at(position: Vec3) -> Vec<PlacedLight> {
 }
 
 fn compare(scene_name: &str, view_name: &str, lights: &[PlacedLight], width: u32, height: u32) {
-    compare_with(scene_name, view_name, lights, (width, height), Direct::Learned, &Variant::ALL, |_| {});
+    compare_with(scene_name, view_name, lights, (width, height), DirectMode::Learned, &Variant::ALL, |_| {});
 }
 
 /// The GPU's `variants` against the CPU inference with direct light from `direct`: 99.9% of
@@ -37,7 +39,7 @@ fn compare_with(
     view_name: &str,
     lights: &[PlacedLight],
     (width, height): (u32, u32),
-    direct: Direct,
+    direct: DirectMode,
     variants: &[Variant],
     edit: fn(&mut Scene),
 ) {
@@ -55,7 +57,8 @@ fn compare_with(
             // One frame serves every configuration: it starts at another size with the light
             // where the glTF puts it, then is resized and given the lights.
             let start = vk::Extent2D { width: width / 2 + 3, height: height / 2 + 1 };
-            let mut frame = GpuFrame::new(&ctx, &scene, &model, variant, start, FrameOutput::Radiance, direct).unwrap();
+            let mut frame =
+                SceneFrame::new(&ctx, &scene, &model, variant, start, FrameOutput::Radiance, direct).unwrap();
             let mut settings = FrameSettings {
                 view: view.clone(),
                 lights: vec![scene.default_light()],
@@ -63,7 +66,7 @@ fn compare_with(
                 shown: Shown::Gi,
             };
             frame.render(&ctx, &settings).unwrap();
-            frame.resize(&ctx, extent).unwrap();
+            frame.gpu.resize(&ctx, extent).unwrap();
             settings.lights = lights.to_vec();
             let pixels = frame.render(&ctx, &settings).unwrap();
             frame.destroy(&ctx);
@@ -78,7 +81,7 @@ fn compare_with(
     let cpu = predict_image(&world, &camera, &model, (width, height), direct.cpu(&scene));
     let pixels = (width * height) as usize;
     let edges = match direct {
-        Direct::Analytic => shadow_edges(&world, &camera, (width, height)),
+        DirectMode::Analytic => shadow_edges(&world, &camera, (width, height)),
         _ => vec![false; pixels],
     };
     let near_edges = edges.iter().filter(|&&e| e).count();
@@ -206,7 +209,7 @@ fn analytic_direct_matches_the_cpu_many_objects() {
         PlacedLight { position: Vec3::new(-1.2, 2.5, 0.6), scale: Vec3::new(0.3, 0.5, 1.0) },
     ];
     let variants = [Variant::Tiled, Variant::PerObject];
-    compare_with("many-objects", "table", &lights, (120, 80), Direct::Analytic, &variants, |_| {});
+    compare_with("many-objects", "table", &lights, (120, 80), DirectMode::Analytic, &variants, |_| {});
 }
 
 /// Analytic direct light needs only the indirect networks: a model without its direct
@@ -228,8 +231,9 @@ fn analytic_direct_needs_no_direct_networks() {
         shown: Shown::Gi,
     };
     let render = |model: &Model| {
-        let frame = GpuFrame::new(&ctx, &scene, model, Variant::Tiled, extent, FrameOutput::Radiance, Direct::Analytic)
-            .unwrap();
+        let frame =
+            SceneFrame::new(&ctx, &scene, model, Variant::Tiled, extent, FrameOutput::Radiance, DirectMode::Analytic)
+                .unwrap();
         let pixels = frame.render(&ctx, &settings).unwrap();
         frame.destroy(&ctx);
         pixels.gi
@@ -262,10 +266,11 @@ fn display_frame_matches_the_tonemapped_radiance() {
     let extent = vk::Extent2D { width: 96, height: 64 };
     let ctx = gpu();
     let radiance =
-        GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance, Direct::Learned).unwrap();
+        SceneFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance, DirectMode::Learned)
+            .unwrap();
     for variant in [Variant::Tiled, Variant::PerObject] {
         let display =
-            GpuFrame::new(&ctx, &scene, &model, variant, extent, FrameOutput::Display, Direct::Learned).unwrap();
+            SceneFrame::new(&ctx, &scene, &model, variant, extent, FrameOutput::Display, DirectMode::Learned).unwrap();
         for shown in [Shown::Gi, Shown::Direct, Shown::Indirect] {
             let settings = FrameSettings {
                 view: scene.views[0].clone(),

@@ -5,7 +5,8 @@
 
 use std::path::Path;
 
-use rrf::gpu_frame::{network_units, Direct};
+use rrf::direct_mode::DirectMode;
+use rrf::scene_frame::network_units;
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::network::Component;
@@ -20,7 +21,7 @@ fn units_weigh_each_objects_leaves_as_the_cpu_does() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
         let scene = Scene::load(&dir).unwrap();
         let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
-        let units = network_units(&scene, &model, Direct::Learned);
+        let units = network_units(&scene, &model, DirectMode::Learned);
         assert!(units.len() > scene.objects.len(), "{name}: the shipped model splits some objects");
         let bounds = scene.bounds();
         let mut rng = Rng::new(7, 0);

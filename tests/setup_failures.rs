@@ -8,9 +8,11 @@ mod common;
 use std::path::Path;
 
 use common::{finish_clean, gpu};
-use rrf::gpu_frame::{Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
+use rrf::direct_mode::DirectMode;
+use rrf::scene_frame::{FrameSettings, SceneFrame};
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
+use rrf_renderer::frame::{FrameOutput, Shown};
 use rrf_renderer::passes::network::Variant;
 use rrf_renderer::vk;
 
@@ -33,16 +35,16 @@ fn a_frame_that_fails_at_any_set_up_step_leaves_nothing_behind() {
     // many-objects' point light allows analytic direct light: the shadow pass's set-up too.
     let (many, many_model) = shipped("many-objects");
     let cases = [
-        (&cornell, &cornell_model, Variant::Tiled, Direct::Learned),
-        (&cornell, &cornell_model, Variant::Storage, Direct::Learned),
-        (&many, &many_model, Variant::Tiled, Direct::Analytic),
+        (&cornell, &cornell_model, Variant::Tiled, DirectMode::Learned),
+        (&cornell, &cornell_model, Variant::Storage, DirectMode::Learned),
+        (&many, &many_model, Variant::Tiled, DirectMode::Analytic),
     ];
     for (scene, model, variant, direct) in cases {
         let mut step = 0;
         loop {
             let ctx = gpu();
             ctx.fail_at_step(Some(ctx.steps_taken() + step));
-            match GpuFrame::new(&ctx, scene, model, variant, EXTENT, FrameOutput::Radiance, direct) {
+            match SceneFrame::new(&ctx, scene, model, variant, EXTENT, FrameOutput::Radiance, direct) {
                 Ok(frame) => {
                     frame.destroy(&ctx);
                     finish_clean(ctx);
@@ -66,7 +68,8 @@ fn a_failed_resize_leaves_the_frame_usable_and_nothing_behind() {
     let (scene, model) = cornell_box();
     let ctx = gpu();
     let mut frame =
-        GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, EXTENT, FrameOutput::Radiance, Direct::Learned).unwrap();
+        SceneFrame::new(&ctx, &scene, &model, Variant::Tiled, EXTENT, FrameOutput::Radiance, DirectMode::Learned)
+            .unwrap();
     let settings = FrameSettings {
         view: scene.views[0].clone(),
         lights: vec![scene.default_light()],
@@ -78,13 +81,13 @@ fn a_failed_resize_leaves_the_frame_usable_and_nothing_behind() {
     let mut step = 0;
     loop {
         ctx.fail_at_step(Some(ctx.steps_taken() + step));
-        let resized = frame.resize(&ctx, bigger);
+        let resized = frame.gpu.resize(&ctx, bigger);
         ctx.fail_at_step(None);
         match resized {
             Ok(()) => break,
             Err(e) => {
                 assert!(format!("{e:#}").contains("device memory allocation has failed"));
-                assert_eq!(frame.extent(), EXTENT, "a failed resize keeps the old size");
+                assert_eq!(frame.gpu.extent(), EXTENT, "a failed resize keeps the old size");
                 let pixels = frame.render(&ctx, &settings).unwrap();
                 assert!(pixels.gi == before.gi, "step {step}: the frame after a failed resize is not the frame before");
                 step += 1;
@@ -92,11 +95,12 @@ fn a_failed_resize_leaves_the_frame_usable_and_nothing_behind() {
         }
     }
     assert!(step >= 5, "only {step} resize steps were tried");
-    assert_eq!(frame.extent(), bigger);
+    assert_eq!(frame.gpu.extent(), bigger);
     let resized = frame.render(&ctx, &settings).unwrap();
     frame.destroy(&ctx);
     let fresh =
-        GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, bigger, FrameOutput::Radiance, Direct::Learned).unwrap();
+        SceneFrame::new(&ctx, &scene, &model, Variant::Tiled, bigger, FrameOutput::Radiance, DirectMode::Learned)
+            .unwrap();
     let expected = fresh.render(&ctx, &settings).unwrap();
     fresh.destroy(&ctx);
     assert!(resized.gi == expected.gi, "the resized frame is not a frame made at its size");

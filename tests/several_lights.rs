@@ -15,13 +15,15 @@ mod common;
 use std::path::Path;
 
 use common::{finish_clean, gpu};
+use rrf::direct_mode::DirectMode;
 use rrf::eval::metrics::{compare, Metrics};
-use rrf::gpu_frame::{rgb, Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use rrf::lights::MAX_LIGHTS;
+use rrf::scene_frame::{rgb, FrameSettings, SceneFrame};
 use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::scene::{PlacedLight, Scene};
 use rrf_baker::trace::{render, Camera, Footprint, Geometry, RenderSettings, TraceSettings, World};
+use rrf_renderer::frame::{FrameOutput, Shown};
 use rrf_renderer::passes::network::Variant;
 use rrf_renderer::vk;
 
@@ -40,7 +42,8 @@ fn two_lights_match_the_path_traced_two_light_reference() {
     let ctx = gpu();
     let extent = vk::Extent2D { width: SIZE, height: SIZE };
     let frame =
-        GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance, Direct::Learned).unwrap();
+        SceneFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance, DirectMode::Learned)
+            .unwrap();
     let frames: Vec<[Vec<Vec3>; 3]> = cases
         .iter()
         .map(|lights| {
@@ -126,7 +129,7 @@ fn sums_of_one_light_frames(singles: &[[Vec<Vec3>; 3]], all: &[Vec<Vec3>; 3]) {
 /// many-objects (16 point lights, so 16 cube shadow maps, the atlas full).
 #[test]
 fn max_lights_add_up() {
-    for (name, direct) in [("cornell-box", Direct::Learned), ("many-objects", Direct::Analytic)] {
+    for (name, direct) in [("cornell-box", DirectMode::Learned), ("many-objects", DirectMode::Analytic)] {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name);
         let scene = Scene::load(&dir).unwrap();
         let model = Model::load(&dir.join("model.safetensors"), Some(&scene)).unwrap();
@@ -143,7 +146,8 @@ fn max_lights_add_up() {
             .collect();
         let ctx = gpu();
         let extent = vk::Extent2D { width: SIZE, height: SIZE };
-        let frame = GpuFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance, direct).unwrap();
+        let frame =
+            SceneFrame::new(&ctx, &scene, &model, Variant::Tiled, extent, FrameOutput::Radiance, direct).unwrap();
         let render = |lights: &[PlacedLight]| {
             let settings = FrameSettings {
                 view: scene.views[0].clone(),

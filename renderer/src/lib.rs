@@ -7,6 +7,7 @@
 
 pub mod backend;
 pub mod error;
+pub mod frame;
 pub mod lights;
 pub mod passes;
 

@@ -11,7 +11,7 @@ use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
 use serde_json::json;
 
-use crate::gpu_frame::Direct;
+use crate::direct_mode::DirectMode;
 use crate::progress::Progress;
 
 #[derive(ValueEnum, Clone, Copy, Debug)]
@@ -56,8 +56,8 @@ pub struct BakeArgs {
     /// run time) trains a direct and an indirect network per object; `analytic` trains only the indirect ones (half the training), for
     /// rendering with `--direct analytic` (a moving point or spot light only). Give the same
     /// value to every stage of a split bake.
-    #[arg(long, value_enum, default_value_t = Direct::Learned)]
-    pub direct: Direct,
+    #[arg(long, value_enum, default_value_t = DirectMode::Learned)]
+    pub direct: DirectMode,
     /// Run one stage of a bake split across processes or machines (a cluster's array jobs):
     /// `sample`, then `aim`, then `train`, each needing every shard of the stages before, then
     /// --merge. Needs --shard. Every process uses the same bake cache (MODEL.bake-cache/, on a
@@ -216,7 +216,7 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         QualityArg::Final => Quality::Final,
     };
     let mut settings = BakeSettings::new(quality, args.seed, &scene);
-    if args.direct == Direct::Analytic {
+    if args.direct == DirectMode::Analytic {
         args.direct.check_scene(&scene)?;
         settings.trained = Trained::IndirectOnly;
     }

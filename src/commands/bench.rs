@@ -9,12 +9,14 @@ use rrf_baker::model::Model;
 use rrf_baker::network::Component;
 use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_renderer::backend::frames::{FrameLoop, FRAMES_IN_FLIGHT};
+use rrf_renderer::frame::{Frame, FrameConstants, FrameOutput, Shown, TIMESTAMPS};
 use rrf_renderer::{vk, Context, ContextOptions, Validation};
 use serde_json::json;
 
 use super::variant::VariantArg;
+use crate::direct_mode::DirectMode;
 use crate::frame_stats::{median, Stats};
-use crate::gpu_frame::{Direct, FrameOutput, FrameSettings, GpuFrame, Shown, TIMESTAMPS};
+use crate::scene_frame::{FrameSettings, SceneFrame};
 
 /// Frames run before timing starts.
 const WARM_UP: usize = 2;
@@ -81,8 +83,8 @@ pub struct BenchArgs {
     /// (the walkthrough's frame), `both` times each.
     #[arg(long, value_enum, default_value_t = OutputArg::Both)]
     pub output: OutputArg,
-    #[arg(long, value_enum, default_value_t = Direct::Auto, help = super::DIRECT_HELP)]
-    pub direct: Direct,
+    #[arg(long, value_enum, default_value_t = DirectMode::Auto, help = super::DIRECT_HELP)]
+    pub direct: DirectMode,
     /// Numbers of lights to time, e.g. 1,2,4: copies of the moving light spread through its
     /// box (each 1 to 16). With two or more, the cost of each extra light is printed.
     #[arg(long, default_value = "1", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=16))]
@@ -162,22 +164,18 @@ impl Bench<'_> {
         let setup = Instant::now();
         let direct = args.direct.resolve(scene, Some(variant.0));
         direct.check(scene, model)?;
-        let frame = GpuFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, output, direct)?;
+        let frame = SceneFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, output, direct)?;
         let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
         let settings =
             FrameSettings { view: view.clone(), lights: lights.to_vec(), exposure_scale: 1.0, shown: Shown::Gi };
-        let bytes_per_pixel = frame.bytes_per_pixel(ctx, &settings);
-        let timed = self.time_frames(&frame, &settings);
-        let objects = timed.as_ref().ok().map(|_| frame.read_objects(ctx));
+        let measured = self.measure(&frame, &settings);
         frame.destroy(ctx);
-        let stats = timed?;
-        let bytes_per_pixel = bytes_per_pixel?;
-        let objects = objects.expect("read after timing")?;
+        let (bytes_per_pixel, stats, objects) = measured?;
         let [gbuffer, network, tonemap, _rest] = &stats.gpu_ms;
         // Networks evaluated per frame: two per pixel of an object that has them.
         let trained: Vec<bool> = scene.objects.iter().map(|o| model.has(&o.name, Component::Direct)).collect();
         // Analytic direct light computes direct light instead of evaluating its network.
-        let per_pixel = if direct == Direct::Analytic { 1 } else { 2 };
+        let per_pixel = if direct == DirectMode::Analytic { 1 } else { 2 };
         let evaluations = per_pixel * objects.iter().filter(|&&id| id > 0 && trained[id as usize - 1]).count();
         let network_ms = median(network);
         let per_s = evaluations as f64 / (network_ms * 1e-3);
@@ -210,10 +208,19 @@ impl Bench<'_> {
 }
 
 impl Bench<'_> {
+    /// The image bytes per pixel of a frame of `settings`, its timings, and the object ids
+    /// of its pixels.
+    fn measure(&self, frame: &SceneFrame, settings: &FrameSettings) -> Result<(u32, Stats, Vec<u32>)> {
+        let constants = frame.constants(settings)?;
+        let bytes_per_pixel = frame.gpu.bytes_per_pixel(self.ctx, &constants)?;
+        let stats = self.time_frames(&frame.gpu, &constants)?;
+        Ok((bytes_per_pixel, stats, frame.gpu.read_objects(self.ctx)?))
+    }
+
     /// Runs warm-up and timed frames with [`FRAMES_IN_FLIGHT`] in flight. Returns, per timed
-    /// frame, the GPU milliseconds of each timed interval (`gpu_frame::TIMED_PASSES`) and the
+    /// frame, the GPU milliseconds of each timed interval (`rrf_renderer::frame::TIMED_PASSES`) and the
     /// CPU milliseconds from the frame's start to the next's.
-    fn time_frames(&self, frame: &GpuFrame, settings: &FrameSettings) -> Result<Stats> {
+    fn time_frames(&self, frame: &Frame, constants: &FrameConstants) -> Result<Stats> {
         let ctx = self.ctx;
         let frames = self.args.frames as usize;
         let mut ring = FrameLoop::new(ctx, TIMESTAMPS)?;
@@ -221,7 +228,7 @@ impl Bench<'_> {
             let mut stats = Stats::default();
             // The last FRAMES_IN_FLIGHT frames only deliver the timestamps of the ones before.
             for i in 0..WARM_UP + frames + FRAMES_IN_FLIGHT {
-                let (handles, stamps) = ring.begin(ctx)?;
+                let stamps = ring.begin(ctx)?;
                 stats.frame_started();
                 let stamped_frame = i.checked_sub(FRAMES_IN_FLIGHT);
                 if let (Some(stamps), Some(f)) = (stamps, stamped_frame) {
@@ -229,8 +236,7 @@ impl Bench<'_> {
                         stats.add_timestamps(&stamps, self.period_ns);
                     }
                 }
-                frame.record(ctx, handles.cmd, settings, None, Some(handles.queries), vec![])?;
-                ring.submit(ctx, None, None, true)?;
+                frame.draw(ctx, &mut ring, None, constants, None, None)?;
             }
             // Interval k runs from frame k to frame k + 1: keep those of the timed frames.
             stats.frame_ms.truncate(WARM_UP + frames);

@@ -13,19 +13,21 @@ use rrf_baker::scene::{EvalDefaults, PlacedLight, Scene};
 use rrf_baker::trace::render::RenderSettings;
 use rrf_baker::trace::sampling::mix64;
 use rrf_baker::trace::{Camera, Geometry, TraceSettings, World};
+use rrf_renderer::frame::{FrameOutput, Shown};
 use rrf_renderer::passes::network::Variant;
 use rrf_renderer::{vk, Context, ContextOptions};
 
 use super::view_args::PixelFootprint;
+use crate::direct_mode::DirectMode;
 use crate::eval::configs::{held_out, EvalConfig};
 use crate::eval::figure::{compose, Panel};
 use crate::eval::metrics::{compare, Baselines, Metrics};
 use crate::eval::reference_cache::{default_cache_dir, reference};
 use crate::eval::report::{self, Camera as CameraReport, ComponentMetrics, ConfigReport, Report};
 use crate::eval::seams::{pixel_hits, seams, Hit, Seam};
-use crate::gpu_frame::{rgb, Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
 use crate::image_out::tonemap_rgb8;
 use crate::progress::Progress;
+use crate::scene_frame::{rgb, FrameSettings, SceneFrame};
 
 const MAX_DEPTH: u32 = 8;
 const RR_DEPTH: u32 = 5;
@@ -67,8 +69,8 @@ pub struct EvalArgs {
     /// Where to cache the references; default: .cache/references/ in the scene's folder.
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
-    #[arg(long, value_enum, default_value_t = Direct::Auto, help = super::DIRECT_HELP)]
-    pub direct: Direct,
+    #[arg(long, value_enum, default_value_t = DirectMode::Auto, help = super::DIRECT_HELP)]
+    pub direct: DirectMode,
     /// Where in its pixel each reference path starts. `centre` traces the ray whose hit the
     /// G-buffer rasterises, so the scores are the networks' error alone; `area` scores against
     /// antialiased references, which adds the raster's aliasing at edges and in textures (the
@@ -83,9 +85,9 @@ pub struct EvalArgs {
 /// Makes the predictions: the Vulkan renderer (one frame for every configuration), or the
 /// CPU inference.
 enum Predictor {
-    Gpu(Box<(Context, GpuFrame)>),
+    Gpu(Box<(Context, SceneFrame)>),
     /// The CPU inference, with direct light from where it says.
-    Cpu(Direct),
+    Cpu(DirectMode),
 }
 
 /// The Vulkan context and the one frame every configuration renders with.
@@ -93,11 +95,11 @@ fn gpu_predictor(
     scene: &Scene,
     model: &Model,
     (width, height): (u32, u32),
-    direct: Direct,
-) -> Result<Box<(Context, GpuFrame)>> {
+    direct: DirectMode,
+) -> Result<Box<(Context, SceneFrame)>> {
     let ctx = Context::new(&ContextOptions::from_env())?;
     let extent = vk::Extent2D { width, height };
-    let frame = GpuFrame::new(&ctx, scene, model, Variant::Tiled, extent, FrameOutput::Radiance, direct)?;
+    let frame = SceneFrame::new(&ctx, scene, model, Variant::Tiled, extent, FrameOutput::Radiance, direct)?;
     Ok(Box::new((ctx, frame)))
 }
 
@@ -193,7 +195,7 @@ pub fn run(args: &EvalArgs) -> Result<()> {
             let hits = pixel_hits(&scene, &geometry, config, (width, height));
             // Analytic direct light has no cuts: only the indirect trees show.
             let components: &[Component] = match direct {
-                Direct::Analytic => &[Component::Indirect],
+                DirectMode::Analytic => &[Component::Indirect],
                 _ => &Component::ALL,
             };
             let cuts = Cuts { scene: &scene, model: &model, components, hits: &hits };

@@ -10,13 +10,15 @@ use rrf_baker::model::Model;
 use rrf_baker::predict::predict_image;
 use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_baker::trace::{Camera, Geometry, World};
+use rrf_renderer::frame::{FrameOutput, Shown};
 use rrf_renderer::{vk, Context, ContextOptions};
 
 use super::bake::model_to_render;
 use super::variant::VariantArg;
 use super::view_args::{Component, ViewArgs};
-use crate::gpu_frame::{rgb, Direct, FrameOutput, FrameSettings, GpuFrame, Shown};
+use crate::direct_mode::DirectMode;
 use crate::image_out::{check_output, write_image};
+use crate::scene_frame::{rgb, FrameSettings, SceneFrame};
 
 #[derive(Args, Debug)]
 pub struct RenderArgs {
@@ -27,8 +29,8 @@ pub struct RenderArgs {
     /// Which light to show.
     #[arg(long, value_enum, default_value_t = Component::Gi)]
     pub component: Component,
-    #[arg(long, value_enum, default_value_t = Direct::Auto, help = super::DIRECT_HELP)]
-    pub direct: Direct,
+    #[arg(long, value_enum, default_value_t = DirectMode::Auto, help = super::DIRECT_HELP)]
+    pub direct: DirectMode,
     /// How the networks reach the shader (GPU only).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
     pub variant: VariantArg,
@@ -70,7 +72,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
 /// How a frame is made on the Vulkan device, and its size.
 struct GpuTarget {
     variant: VariantArg,
-    direct: Direct,
+    direct: DirectMode,
     size: (u32, u32),
 }
 
@@ -86,7 +88,7 @@ fn gpu_render(
     let (variant, (width, height)) = (target.variant, target.size);
     let ctx = Context::new(&ContextOptions::from_env())?;
     let extent = vk::Extent2D { width, height };
-    let frame = GpuFrame::new(&ctx, scene, model, variant.0, extent, FrameOutput::Radiance, target.direct)?;
+    let frame = SceneFrame::new(&ctx, scene, model, variant.0, extent, FrameOutput::Radiance, target.direct)?;
     let settings = FrameSettings { view: view.clone(), lights, exposure_scale: 1.0, shown: Shown::Gi };
     let rendered = frame.render(&ctx, &settings);
     frame.destroy(&ctx);

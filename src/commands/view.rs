@@ -10,9 +10,9 @@ use rrf_renderer::{backend::swapchain, vk, Context, ContextOptions};
 use super::bake::model_to_render;
 use super::variant::VariantArg;
 use super::view_args::named_view;
-use crate::gpu_frame::Direct;
+use crate::direct_mode::DirectMode;
 use crate::parse::parse_size;
-use crate::viewer::renderer::Renderer;
+use crate::viewer::gpu::ViewerGpu;
 use crate::viewer::script::Script;
 use crate::viewer::state::ViewerState;
 use crate::viewer::{run_headless, window, RunPlan, Session};
@@ -52,8 +52,8 @@ pub struct ViewArgs {
     /// Window size (or frame size when headless) in pixels, each side 1 to 16384.
     #[arg(long, default_value = "960x540", value_name = "WxH")]
     pub size: String,
-    #[arg(long, value_enum, default_value_t = Direct::Auto, help = super::DIRECT_HELP)]
-    pub direct: Direct,
+    #[arg(long, value_enum, default_value_t = DirectMode::Auto, help = super::DIRECT_HELP)]
+    pub direct: DirectMode,
     /// How the networks reach the shader (see `rrf render --help`).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
     pub variant: VariantArg,
@@ -173,11 +173,11 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let ctx = Context::new(&options).context("cannot start Vulkan (`rrf info` says more)")?;
     let extent = vk::Extent2D { width: size.0, height: size.1 };
     let started = std::time::Instant::now();
-    let mut renderer = Renderer::new(ctx, &scene, &model, (args.variant.0, direct), extent)?;
+    let mut gpu = ViewerGpu::new(ctx, &scene, &model, (args.variant.0, direct), extent)?;
     eprintln!(
         "{} on {} ({} network pass, pipelines ready in {:.1} s)",
         scene.name,
-        renderer.ctx.info.name,
+        gpu.ctx.info.name,
         args.variant.0.name(),
         started.elapsed().as_secs_f64()
     );
@@ -185,12 +185,12 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let ran = match event_loop {
         Some(event_loop) => {
             let title = format!("rrf view: {}", scene.name);
-            window::run(event_loop, &mut renderer, &mut session, title, size, args.present_mode.vk())
+            window::run(event_loop, &mut gpu, &mut session, title, size, args.present_mode.vk())
         }
-        None => run_headless(&mut renderer, &mut session),
+        None => run_headless(&mut gpu, &mut session),
     };
     let summary = session.summary();
-    let finished = renderer.finish();
+    let finished = gpu.finish();
     ran?;
     finished?;
     if args.stats {

@@ -1,7 +1,7 @@
 //! `rrf view`: the interactive walkthrough, in a window (winit) or headless, driven by the
 //! keyboard and mouse or by a script.
 
-pub mod renderer;
+pub mod gpu;
 pub mod script;
 pub mod state;
 pub mod window;
@@ -13,7 +13,8 @@ use std::time::Instant;
 use anyhow::{Context as _, Result};
 
 use crate::frame_stats::Stats;
-use renderer::{Presenter, Renderer};
+use gpu::ViewerGpu;
+use rrf_renderer::backend::present::Presenter;
 use script::{Action, Script, FRAME_SECONDS};
 use state::{Held, ViewerState};
 
@@ -94,7 +95,7 @@ impl Session {
     /// should do next.
     pub fn step(
         &mut self,
-        renderer: &mut Renderer,
+        gpu: &mut ViewerGpu,
         presenter: Option<&mut Presenter>,
         overlay_scale: u32,
     ) -> Result<Requests> {
@@ -127,9 +128,9 @@ impl Session {
         if let (true, Some(path)) = (last, &self.plan.screenshot) {
             screenshots.push(path.clone());
         }
-        renderer.draw(&self.state, &mut self.stats, presenter, overlay_scale, screenshots)?;
+        gpu.draw(&self.state, &mut self.stats, presenter, overlay_scale, screenshots)?;
         self.frame += 1;
-        report_saved(renderer)?;
+        report_saved(gpu)?;
         requests.quit |= last;
         Ok(requests)
     }
@@ -146,19 +147,19 @@ impl Session {
 }
 
 /// Prints the screenshots written since the last call; fails on one that could not be.
-pub fn report_saved(renderer: &Renderer) -> Result<()> {
-    for saved in renderer.take_saved() {
+pub fn report_saved(gpu: &ViewerGpu) -> Result<()> {
+    for saved in gpu.take_saved() {
         eprintln!("saved screenshot {}", saved?.display());
     }
     Ok(())
 }
 
 /// Runs a session without a window: frames go to the display image only (screenshots read it).
-pub fn run_headless(renderer: &mut Renderer, session: &mut Session) -> Result<()> {
+pub fn run_headless(gpu: &mut ViewerGpu, session: &mut Session) -> Result<()> {
     loop {
-        let requests = session.step(renderer, None, 1)?;
+        let requests = session.step(gpu, None, 1)?;
         if let Some((w, h)) = requests.resize {
-            renderer.resize(rrf_renderer::vk::Extent2D { width: w, height: h })?;
+            gpu.resize(rrf_renderer::vk::Extent2D { width: w, height: h })?;
         }
         if requests.quit {
             return Ok(());

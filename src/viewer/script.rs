@@ -24,8 +24,8 @@ use std::path::{Path, PathBuf};
 use anyhow::{anyhow, bail, Context, Result};
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::PlacedLight;
+use rrf_renderer::frame::Shown;
 
-use crate::gpu_frame::Shown;
 use crate::lights::parse_light;
 use crate::parse::{parse_exposure, parse_size, parse_vec3};
 

@@ -5,13 +5,15 @@
 use anyhow::{bail, Result};
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::{Aabb, PlacedLight, Scene, View};
+use rrf_renderer::frame::{Shown, TIMED_PASSES};
 use rrf_renderer::passes::overlay::{Colour, TextGrid};
 
 use super::script::Action;
+use crate::direct_mode::DirectMode;
 use crate::frame_stats::Stats;
-use crate::gpu_frame::{Direct, FrameSettings, Shown, TIMED_PASSES};
 use crate::lights::{fixed_lights, MAX_INTENSITY, MAX_LIGHTS};
 use crate::parse::MAX_EXPOSURE;
+use crate::scene_frame::FrameSettings;
 
 /// Keys that act for as long as they are held.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -74,7 +76,7 @@ pub struct ViewerState {
     pub overlay: bool,
     pub help: bool,
     /// Where direct light comes from, for the overlay.
-    pub direct: Direct,
+    pub direct: DirectMode,
     camera_tween: Option<Tween>,
     light_tween: Option<Tween>,
 }
@@ -109,7 +111,7 @@ impl ViewerState {
             exposure: 0.0,
             overlay: true,
             help: true,
-            direct: Direct::Learned,
+            direct: DirectMode::Learned,
             camera_tween: None,
             light_tween: None,
             home: view,

@@ -11,10 +11,11 @@ use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop};
 use winit::keyboard::{KeyCode, PhysicalKey};
 use winit::window::{Window, WindowId};
 
-use super::renderer::{Presenter, Renderer};
+use super::gpu::ViewerGpu;
 use super::state::Held;
 use super::{Session, ViewerState};
-use crate::gpu_frame::Shown;
+use rrf_renderer::backend::present::Presenter;
+use rrf_renderer::frame::Shown;
 
 /// The key held for a continuous action, by physical position (WASD works on any layout).
 fn held_key(key: KeyCode) -> Option<Held> {
@@ -48,7 +49,7 @@ pub fn instance_extensions(event_loop: &EventLoop<()>) -> Result<Vec<&'static st
 }
 
 struct App<'a> {
-    renderer: &'a mut Renderer,
+    gpu: &'a mut ViewerGpu,
     session: &'a mut Session,
     title: String,
     size: (u32, u32),
@@ -75,7 +76,7 @@ impl App<'_> {
         let window = event_loop.create_window(attributes).context("cannot create the window")?;
         let display = window.display_handle().context("no display handle")?.as_raw();
         let handle = window.window_handle().context("no window handle")?.as_raw();
-        let surface = Surface::new(&self.renderer.ctx, display, handle)?;
+        let surface = Surface::new(&self.gpu.ctx, display, handle)?;
         self.presenter = Some(Presenter::new(surface, self.present_mode));
         self.window = Some(window);
         Ok(())
@@ -84,12 +85,12 @@ impl App<'_> {
     fn redraw(&mut self, event_loop: &ActiveEventLoop) -> Result<()> {
         let (Some(window), Some(presenter)) = (&self.window, &mut self.presenter) else { return Ok(()) };
         let size = window.inner_size();
-        if !self.renderer.fit(presenter, (size.width, size.height))? {
+        if !self.gpu.fit(presenter, (size.width, size.height))? {
             // Minimised: nothing to draw until the window is restored (a resize event).
             return Ok(());
         }
         let scale = window.scale_factor().round().max(1.0) as u32;
-        let requests = self.session.step(self.renderer, Some(presenter), scale)?;
+        let requests = self.session.step(self.gpu, Some(presenter), scale)?;
         if let Some((w, h)) = requests.resize {
             // The swapchain follows when the window has its new size.
             let _ = window.request_inner_size(PhysicalSize::new(w, h));
@@ -197,7 +198,7 @@ impl ApplicationHandler for App<'_> {
 /// Opens the window and runs the session until it ends or the window closes.
 pub fn run(
     event_loop: EventLoop<()>,
-    renderer: &mut Renderer,
+    gpu: &mut ViewerGpu,
     session: &mut Session,
     title: String,
     size: (u32, u32),
@@ -206,7 +207,7 @@ pub fn run(
     // Frames are driven by redraw requests; with none (a minimised window) the loop sleeps.
     event_loop.set_control_flow(ControlFlow::Wait);
     let mut app = App {
-        renderer,
+        gpu,
         session,
         title,
         size,
@@ -221,7 +222,7 @@ pub fn run(
     let ran = event_loop.run_app(&mut app).context("the window's event loop failed");
     // The surface goes before the window it was made for.
     let retired = match app.presenter.take() {
-        Some(p) => app.renderer.retire(p),
+        Some(p) => app.gpu.retire(p),
         None => Ok(()),
     };
     let result = match app.error.take() {

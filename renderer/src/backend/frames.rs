@@ -1,5 +1,6 @@
 //! Frames in flight: per-frame command buffers, fences, semaphores, timestamp queries and a
-//! deletion queue, so that the CPU records frame N+1 while the GPU runs frame N.
+//! queue of work deferred until a frame has finished (destroying what it used, saving
+//! screenshots it read back), so that the CPU records frame N+1 while the GPU runs frame N.
 
 use ash::vk;
 
@@ -9,8 +10,9 @@ use crate::error::{Result, VkContext};
 /// Frames the CPU may record ahead of the GPU.
 pub const FRAMES_IN_FLIGHT: usize = 2;
 
-/// Work to do once the frame that last used something has finished on the GPU.
-pub type Deletion = Box<dyn FnOnce(&Context)>;
+/// Work to do once the frame that last used something has finished on the GPU: destroying
+/// it, or reading what the frame wrote.
+pub type Deferred = Box<dyn FnOnce(&Context)>;
 
 /// The handles a frame records and submits with.
 #[derive(Clone, Copy, Debug)]
@@ -31,7 +33,7 @@ struct FrameSlot {
     queries: vk::QueryPool,
     /// Whether the slot's last frame wrote timestamps that have not been read.
     stamped: bool,
-    deletions: Vec<Deletion>,
+    deferred: Vec<Deferred>,
 }
 
 /// A ring of [`FRAMES_IN_FLIGHT`] frame slots.
@@ -101,14 +103,14 @@ impl FrameLoop {
             ctx.set_name(cmd, &format!("frame {index} commands"));
             ctx.set_name(fence, &format!("frame {index} done"));
             ctx.set_name(semaphore, &format!("frame {index} image available"));
-            Ok(FrameSlot { cmd, fence, image_available: semaphore, queries, stamped: false, deletions: Vec::new() })
+            Ok(FrameSlot { cmd, fence, image_available: semaphore, queries, stamped: false, deferred: Vec::new() })
         }
     }
 
-    /// Waits until the next slot's previous frame has finished, runs its deletions, and
-    /// begins its command buffer with its timestamp queries reset. Returns the slot and, if
-    /// its previous frame wrote timestamps, their values (in ticks).
-    pub fn begin(&mut self, ctx: &Context) -> Result<(FrameHandles, Option<Vec<u64>>)> {
+    /// Waits until the next slot's previous frame has finished, runs its deferred work, and
+    /// begins its command buffer with its timestamp queries reset ([`FrameLoop::handles`]).
+    /// Returns, if the slot's previous frame wrote timestamps, their values (in ticks).
+    pub fn begin(&mut self, ctx: &Context) -> Result<Option<Vec<u64>>> {
         self.current = (self.frame % FRAMES_IN_FLIGHT as u64) as usize;
         self.frame += 1;
         let timestamps = self.timestamps;
@@ -118,8 +120,8 @@ impl FrameLoop {
         // is signalled, nothing of the slot's previous frame is pending.
         unsafe {
             device.wait_for_fences(&[slot.fence], true, u64::MAX).vk("vkWaitForFences")?;
-            for deletion in slot.deletions.drain(..) {
-                deletion(ctx);
+            for work in slot.deferred.drain(..) {
+                work(ctx);
             }
             let stamps = if slot.stamped {
                 let mut values = vec![0u64; timestamps as usize];
@@ -135,9 +137,14 @@ impl FrameLoop {
             let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
             device.begin_command_buffer(slot.cmd, &begin).vk("vkBeginCommandBuffer")?;
             device.cmd_reset_query_pool(slot.cmd, slot.queries, 0, timestamps);
-            let handles = FrameHandles { cmd: slot.cmd, image_available: slot.image_available, queries: slot.queries };
-            Ok((handles, stamps))
+            Ok(stamps)
         }
+    }
+
+    /// The handles of the frame [`FrameLoop::begin`] began last.
+    pub fn handles(&self) -> FrameHandles {
+        let slot = &self.slots[self.current];
+        FrameHandles { cmd: slot.cmd, image_available: slot.image_available, queries: slot.queries }
     }
 
     /// Ends the current frame's command buffer and submits it; it waits for `wait` (at the
@@ -172,12 +179,12 @@ impl FrameLoop {
         Ok(())
     }
 
-    /// Runs `deletion` once the current frame has finished on the GPU.
-    pub fn defer(&mut self, deletion: Deletion) {
-        self.slots[self.current].deletions.push(deletion);
+    /// Runs `work` once the current frame has finished on the GPU.
+    pub fn defer(&mut self, work: Deferred) {
+        self.slots[self.current].deferred.push(work);
     }
 
-    /// Waits for every frame in flight and runs every pending deletion.
+    /// Waits for every frame in flight and runs all deferred work.
     pub fn wait_all(&mut self, ctx: &Context) -> Result<()> {
         let fences: Vec<vk::Fence> = self.slots.iter().map(|s| s.fence).collect();
         if !fences.is_empty() {
@@ -185,14 +192,14 @@ impl FrameLoop {
             unsafe { ctx.device.wait_for_fences(&fences, true, u64::MAX) }.vk("vkWaitForFences")?;
         }
         for slot in &mut self.slots {
-            for deletion in slot.deletions.drain(..) {
-                deletion(ctx);
+            for work in slot.deferred.drain(..) {
+                work(ctx);
             }
         }
         Ok(())
     }
 
-    /// Waits for all frames, runs the deletions and destroys the ring.
+    /// Waits for all frames, runs the deferred work and destroys the ring.
     pub fn destroy(mut self, ctx: &Context) {
         let _ = self.wait_all(ctx);
         // SAFETY: no frame of the ring is pending any more.

@@ -8,6 +8,7 @@ pub mod descriptors;
 pub mod device_info;
 pub mod frames;
 pub mod guard;
+pub mod present;
 pub mod resources;
 pub mod swapchain;
 pub mod sync;

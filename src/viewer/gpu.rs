@@ -1,0 +1,167 @@
+//! The viewer's GPU side: one [`SceneFrame`], frames in flight, and the screenshots they
+//! write once finished.
+
+use std::cell::RefCell;
+use std::path::PathBuf;
+use std::rc::Rc;
+
+use anyhow::{Context as _, Result};
+use rrf_baker::atomic_file::write_atomically;
+use rrf_baker::model::Model;
+use rrf_baker::scene::Scene;
+use rrf_renderer::backend::frames::FrameLoop;
+use rrf_renderer::backend::present::Presenter;
+use rrf_renderer::frame::{Drawn, FrameOutput, TIMESTAMPS};
+use rrf_renderer::passes::network::Variant;
+use rrf_renderer::{vk, Context};
+
+use super::state::ViewerState;
+use crate::direct_mode::DirectMode;
+use crate::frame_stats::Stats;
+use crate::scene_frame::SceneFrame;
+
+pub struct ViewerGpu {
+    pub ctx: Context,
+    frame: Option<SceneFrame>,
+    ring: Option<FrameLoop>,
+    /// Nanoseconds per timestamp tick; `None` when the queue cannot write timestamps.
+    period_ns: Option<f64>,
+    /// Screenshots are written once their frame has finished, by work the frame loop defers
+    /// until then; their outcome lands here.
+    saved: Rc<RefCell<Vec<Result<PathBuf>>>>,
+}
+
+impl ViewerGpu {
+    /// The frame for `scene` at `extent`, with frames in flight.
+    pub fn new(
+        ctx: Context,
+        scene: &Scene,
+        model: &Model,
+        (variant, direct): (Variant, DirectMode),
+        extent: vk::Extent2D,
+    ) -> Result<Self> {
+        let frame = SceneFrame::new(&ctx, scene, model, variant, extent, FrameOutput::Display, direct)?;
+        let ring = match FrameLoop::new(&ctx, TIMESTAMPS) {
+            Ok(ring) => ring,
+            Err(e) => {
+                frame.destroy(&ctx);
+                return Err(e.into());
+            }
+        };
+        let period_ns = ctx.info.limits.timestamp_period_ns.map(f64::from);
+        Ok(ViewerGpu { ctx, frame: Some(frame), ring: Some(ring), period_ns, saved: Rc::default() })
+    }
+
+    fn parts(&mut self) -> (&Context, &mut SceneFrame, &mut FrameLoop) {
+        (&self.ctx, self.frame.as_mut().expect("live until finish"), self.ring.as_mut().expect("live until finish"))
+    }
+
+    pub fn extent(&self) -> vk::Extent2D {
+        self.frame.as_ref().expect("live until finish").gpu.extent()
+    }
+
+    /// Makes the frame `extent` big, after the frames in flight have finished.
+    pub fn resize(&mut self, extent: vk::Extent2D) -> Result<()> {
+        if extent == self.extent() {
+            return Ok(());
+        }
+        let (ctx, frame, ring) = self.parts();
+        ring.wait_all(ctx)?;
+        Ok(frame.gpu.resize(ctx, extent)?)
+    }
+
+    /// Screenshots written since the last call, or the errors that stopped them.
+    pub fn take_saved(&self) -> Vec<Result<PathBuf>> {
+        std::mem::take(&mut self.saved.borrow_mut())
+    }
+
+    /// Fits the presenter's swapchain to the window's `size` (in pixels) and the frame to the
+    /// swapchain. Returns `false` when there is nothing to draw to (a minimised window).
+    pub fn fit(&mut self, presenter: &mut Presenter, size: (u32, u32)) -> Result<bool> {
+        let (ctx, _, ring) = self.parts();
+        match presenter.fit(ctx, ring, size)? {
+            Some(extent) => self.resize(extent).map(|()| true),
+            None => Ok(false),
+        }
+    }
+
+    /// Draws one frame of `state` (presented in a window, with a `presenter`), and saves it
+    /// as shown to each PNG of `screenshots` once the GPU has finished it.
+    pub fn draw(
+        &mut self,
+        state: &ViewerState,
+        stats: &mut Stats,
+        presenter: Option<&mut Presenter>,
+        overlay_scale: u32,
+        screenshots: Vec<PathBuf>,
+    ) -> Result<()> {
+        let (period_ns, saved) = (self.period_ns, self.saved.clone());
+        let (ctx, frame, ring) = self.parts();
+        let stamps = ring.begin(ctx)?;
+        stats.frame_started();
+        if let (Some(stamps), Some(period)) = (stamps, period_ns) {
+            stats.add_timestamps(&stamps, period);
+        }
+        let grid = state.overlay.then(|| state.overlay_text(stats, &ctx.info.name));
+        let constants = frame.constants(&state.settings())?;
+        let ldr = frame.gpu.ldr();
+        let buffer = (!screenshots.is_empty()).then(|| ctx.create_readback_buffer(ldr)).transpose()?;
+        let overlay = grid.as_ref().map(|g| (g, overlay_scale));
+        let drawn = frame.gpu.draw(ctx, ring, presenter, &constants, overlay, buffer.as_ref());
+        let Some(buffer) = buffer else { return Ok(drawn.map(|_| ())?) };
+        if drawn? == Drawn::Skipped {
+            ctx.destroy_buffer(buffer);
+            return Ok(());
+        }
+        let extent = ldr.extent;
+        ring.defer(Box::new(move |ctx: &Context| {
+            for path in screenshots {
+                let rgba = buffer.mapped().context("the screenshot buffer is not host-visible");
+                saved.borrow_mut().push(rgba.and_then(|rgba| save_png(&path, extent, rgba)).map(|()| path));
+            }
+            ctx.destroy_buffer(buffer);
+        }));
+        Ok(())
+    }
+
+    /// Waits for every frame and for presentation, then destroys the presenter's swapchain
+    /// and surface.
+    pub fn retire(&mut self, presenter: Presenter) -> Result<()> {
+        let (ctx, _, ring) = self.parts();
+        Ok(presenter.retire(ctx, ring)?)
+    }
+
+    /// Waits for every frame, writes pending screenshots, and tears everything down. Returns
+    /// the context's teardown report as an error if it is not clean.
+    pub fn finish(mut self) -> Result<()> {
+        let ring = self.ring.take().expect("live until finish");
+        // Runs the work deferred to the end of each frame: screenshots of the last frames.
+        ring.destroy(&self.ctx);
+        let saved = super::report_saved(&self);
+        if let Some(frame) = self.frame.take() {
+            frame.destroy(&self.ctx);
+        }
+        let report = self.ctx.finish();
+        saved?;
+        if !report.is_clean() {
+            anyhow::bail!(
+                "Vulkan reported {} validation messages (printed above); leaked {:?}",
+                report.validation_messages,
+                report.leaked
+            );
+        }
+        Ok(())
+    }
+}
+
+/// Writes the RGBA8 pixels read back from the display image as an RGB PNG, through a
+/// temporary file so that a failed write leaves no half-written image.
+pub fn save_png(path: &std::path::Path, extent: vk::Extent2D, rgba: &[u8]) -> Result<()> {
+    let rgb: Vec<u8> = rgba.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+    let image = image::RgbImage::from_raw(extent.width, extent.height, rgb).context("screenshot size mismatch")?;
+    write_atomically(path, |tmp| {
+        image
+            .save_with_format(tmp, image::ImageFormat::Png)
+            .with_context(|| format!("cannot write screenshot {}", path.display()))
+    })
+}
