@@ -9,15 +9,18 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+#include "network_interface.glsl"
+
 // Whether the frame has more than one light: a pipeline of each kind, as in
 // network_specialized_main.glsl.
-layout(constant_id = 0) const bool SEVERAL_LIGHTS = false;
+layout(constant_id = SEVERAL_LIGHTS_ID) const bool SEVERAL_LIGHTS = false;
 
-// Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
-layout(binding = 5) readonly buffer Weights { float weights[]; };
-layout(binding = 6, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 7, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 8, rgba32f) uniform writeonly image2D out_gi;
+// The G-buffer, materials and lights: network_inputs.glsl. Binding numbers:
+// network_interface.glsl.
+layout(binding = WEIGHTS_BINDING) readonly buffer Weights { float weights[]; };
+layout(binding = FIRST_OUTPUT_BINDING, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = FIRST_OUTPUT_BINDING + 1, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = FIRST_OUTPUT_BINDING + 2, rgba32f) uniform writeonly image2D out_gi;
 
 layout(push_constant) uniform Constants {
     vec4 eye;
@@ -26,7 +29,7 @@ layout(push_constant) uniform Constants {
 } constants;
 
 #include "network.glsl"
-#define UNITS_BINDING 9
+#define UNITS_BINDING (FIRST_OUTPUT_BINDING + 3)
 #include "network_units.glsl"
 
 void main() {

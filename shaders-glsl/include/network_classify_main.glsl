@@ -16,24 +16,26 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #define MAX_UNITS 1024
 
 #include "gbuffer_layout.glsl"
+#include "network_interface.glsl"
 
-layout(binding = 0, r32ui) uniform readonly uimage2D gbuffer_id;
+layout(binding = SURFACE_BINDING, rgba32ui) uniform readonly uimage2D gbuffer_surface;
+layout(binding = ID_BINDING, r32ui) uniform readonly uimage2D gbuffer_id;
 // Per material: rgb emitted radiance (before the emissive texture), w specular factor.
-layout(std430, binding = 1) readonly buffer Materials { vec4 materials[]; };
-layout(binding = 2, rgba32ui) uniform readonly uimage2D gbuffer_shading;
-// Binding 3: the unit table (network_units.glsl).
+layout(std430, binding = MATERIALS_BINDING) readonly buffer Materials { vec4 materials[]; };
+layout(binding = SHADING_BINDING, rgba32ui) uniform readonly uimage2D gbuffer_shading;
 // VkDispatchIndirectCommand per unit: x counts its tiles; y and z are 1.
-layout(binding = 4) buffer Dispatch { uint dispatch[]; };
+layout(binding = DISPATCH_BINDING) buffer Dispatch { uint dispatch[]; };
 // Unit u's tiles from index u * tile_capacity, each as x | y << 16.
-layout(binding = 5) writeonly buffer Tiles { uint tiles[]; };
-layout(binding = 6, rgba32ui) uniform readonly uimage2D gbuffer_surface;
+layout(binding = TILES_BINDING) writeonly buffer Tiles { uint tiles[]; };
 #ifdef DISPLAY
-layout(binding = 7, rgba8) uniform writeonly image2D display;
+layout(binding = FIRST_OUTPUT_BINDING, rgba8) uniform writeonly image2D display;
 #include "tonemap.glsl"
+#define OUTPUT_IMAGES 1
 #else
-layout(binding = 7, rgba32f) uniform writeonly image2D out_direct;
-layout(binding = 8, rgba32f) uniform writeonly image2D out_indirect;
-layout(binding = 9, rgba32f) uniform writeonly image2D out_gi;
+layout(binding = FIRST_OUTPUT_BINDING, rgba32f) uniform writeonly image2D out_direct;
+layout(binding = FIRST_OUTPUT_BINDING + 1, rgba32f) uniform writeonly image2D out_indirect;
+layout(binding = FIRST_OUTPUT_BINDING + 2, rgba32f) uniform writeonly image2D out_gi;
+#define OUTPUT_IMAGES 3
 #endif
 
 layout(push_constant) uniform Constants {
@@ -45,7 +47,8 @@ layout(push_constant) uniform Constants {
     uint shown;
 } constants;
 
-#define UNITS_BINDING 3
+// The unit table, after the images (network_units.glsl).
+#define UNITS_BINDING (FIRST_OUTPUT_BINDING + OUTPUT_IMAGES)
 #include "network_units.glsl"
 
 shared uint seen[MAX_UNITS / 32];

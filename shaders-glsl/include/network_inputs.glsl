@@ -1,6 +1,6 @@
 // What every network variant shares: the network's shape, its activation, the 13 raw inputs
 // of a pixel (in the order of `raw_inputs` in baker/src/network.rs), and the G-buffer,
-// materials and lights bindings they are read from (bindings 0-4 of every network shader).
+// materials and lights bindings they are read from (network_interface.glsl).
 #ifndef RRF_NETWORK_INPUTS_GLSL
 #define RRF_NETWORK_INPUTS_GLSL
 
@@ -8,13 +8,14 @@
 #include "network_layout.glsl"
 
 #include "gbuffer_layout.glsl"
+#include "network_interface.glsl"
 
-layout(binding = 0, rgba32ui) uniform readonly uimage2D gbuffer_surface;
-layout(binding = 1, r32ui) uniform readonly uimage2D gbuffer_id;
+layout(binding = SURFACE_BINDING, rgba32ui) uniform readonly uimage2D gbuffer_surface;
+layout(binding = ID_BINDING, r32ui) uniform readonly uimage2D gbuffer_id;
 // Per material: rgb emitted radiance (before the emissive texture), w the
 // KHR_materials_specular factor.
-layout(std430, binding = 2) readonly buffer Materials { vec4 materials[]; };
-layout(binding = 3, rgba32ui) uniform readonly uimage2D gbuffer_shading;
+layout(std430, binding = MATERIALS_BINDING) readonly buffer Materials { vec4 materials[]; };
+layout(binding = SHADING_BINDING, rgba32ui) uniform readonly uimage2D gbuffer_shading;
 // The frame's lights, as many as the push constants' `light_count`: copies of the moving
 // light, each at `position.xyz`, each scaling the networks' output by `scale.rgb`. Light
 // transport is linear in the emission, so the pixel's radiance is the sum over the copies.
@@ -22,7 +23,7 @@ struct Light {
     vec4 position;
     vec4 scale;
 };
-layout(std430, binding = 4) readonly buffer Lights { Light lights[]; };
+layout(std430, binding = LIGHTS_BINDING) readonly buffer Lights { Light lights[]; };
 
 // The material's textured values at `pixel`: read once per pixel and passed to the functions
 // below (lavapipe gathers every image read lane by lane).

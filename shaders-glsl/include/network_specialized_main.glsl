@@ -22,34 +22,37 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
+#include "network_interface.glsl"
+
 // The G-buffer's object value (object id + 1) this pipeline shades.
-layout(constant_id = 0) const uint OBJECT = 1u;
-layout(constant_id = 1) const bool TILED = true;
-layout(constant_id = 2) const bool ANALYTIC = false;
+layout(constant_id = OBJECT_ID) const uint OBJECT = 1u;
+layout(constant_id = TILED_ID) const bool TILED = true;
+layout(constant_id = ANALYTIC_ID) const bool ANALYTIC = false;
 // Whether the frame has more than one light: a pipeline of each kind, because lavapipe runs
 // the networks about 50% slower inside a loop, even one that runs once, and most frames have
 // one light (BENCHMARKS.md, "Several lights").
-layout(constant_id = 3) const bool SEVERAL_LIGHTS = false;
+layout(constant_id = SEVERAL_LIGHTS_ID) const bool SEVERAL_LIGHTS = false;
 // The unit's index (its tile list and its entry in the unit table), its object's first unit,
 // and the number of object entries in the unit table (network_units.glsl).
-layout(constant_id = 4) const uint UNIT = 0u;
-layout(constant_id = 5) const uint OBJECT_FIRST_UNIT = 0u;
-layout(constant_id = 6) const uint OBJECTS = 1u;
+layout(constant_id = UNIT_ID) const uint UNIT = 0u;
+layout(constant_id = OBJECT_FIRST_UNIT_ID) const uint OBJECT_FIRST_UNIT = 0u;
+layout(constant_id = OBJECTS_ID) const uint OBJECTS = 1u;
 
-// Bindings 0-4 (G-buffer, materials, lights): network_inputs.glsl.
-layout(binding = 5) readonly buffer Tiles { uint tiles[]; };
+// The G-buffer, materials and lights: network_inputs.glsl. Binding numbers:
+// network_interface.glsl.
+layout(binding = TILES_BINDING) readonly buffer Tiles { uint tiles[]; };
 #ifdef DISPLAY
-layout(binding = 6, rgba8) uniform writeonly image2D display;
-// The point lights' cube shadow maps (ANALYTIC; a 1×1 stand-in otherwise).
-layout(binding = 7, r32f) uniform readonly image2D shadow_atlas;
-#define UNITS_BINDING 8
+layout(binding = FIRST_OUTPUT_BINDING, rgba8) uniform writeonly image2D display;
+#define OUTPUT_IMAGES 1
 #else
-layout(binding = 6, rgba32f) uniform image2D out_direct;
-layout(binding = 7, rgba32f) uniform image2D out_indirect;
-layout(binding = 8, rgba32f) uniform image2D out_gi;
-layout(binding = 9, r32f) uniform readonly image2D shadow_atlas;
-#define UNITS_BINDING 10
+layout(binding = FIRST_OUTPUT_BINDING, rgba32f) uniform image2D out_direct;
+layout(binding = FIRST_OUTPUT_BINDING + 1, rgba32f) uniform image2D out_indirect;
+layout(binding = FIRST_OUTPUT_BINDING + 2, rgba32f) uniform image2D out_gi;
+#define OUTPUT_IMAGES 3
 #endif
+// The point lights' cube shadow maps (ANALYTIC; a 1×1 stand-in otherwise).
+layout(binding = FIRST_OUTPUT_BINDING + OUTPUT_IMAGES, r32f) uniform readonly image2D shadow_atlas;
+#define UNITS_BINDING (FIRST_OUTPUT_BINDING + OUTPUT_IMAGES + 1)
 
 layout(push_constant) uniform Constants {
     vec4 eye;

@@ -18,6 +18,7 @@
 //! variants can also compute direct light instead of learning it ([`DirectLight::Analytic`]),
 //! with shadow maps from [`crate::passes::shadow`].
 
+mod interface;
 mod specialized;
 mod storage;
 mod units;
@@ -428,26 +429,35 @@ impl<'a> FrameUses<'a> {
     }
 }
 
-/// The bindings `network_storage.comp` and `network_specialized_main.glsl` share: the
-/// G-buffer, the materials and the lights (`network_inputs.glsl`), the variant's buffer
-/// (weights or tile lists), what the pass writes, then `last` (the storage variant's unit
-/// table, the specialized variants' shadow maps).
+/// The bindings of a network shader, in the order of [`interface`]: the G-buffer and the
+/// materials, `fourth` (the lights, or the classification's dispatch arguments), the
+/// variant's `buffer` (weights or tile lists), what the pass writes, then `rest`.
 fn network_bindings<'a>(
     gbuffer: &'a GBufferTargets,
     shared: Shared<'a>,
+    fourth: &'a Buffer,
     buffer: &'a Buffer,
     written: Written<'a>,
-    last: Bind<'a>,
+    rest: impl IntoIterator<Item = Bind<'a>>,
 ) -> Vec<Bind<'a>> {
-    let mut binds = vec![
-        Bind::StorageImage(&gbuffer.surface),
-        Bind::StorageImage(&gbuffer.id),
-        Bind::StorageBuffer(shared.materials),
-        Bind::StorageImage(&gbuffer.shading),
-        Bind::StorageBuffer(shared.lights),
-        Bind::StorageBuffer(buffer),
+    use interface::*;
+    let numbered = [
+        (SURFACE_BINDING, Bind::StorageImage(&gbuffer.surface)),
+        (ID_BINDING, Bind::StorageImage(&gbuffer.id)),
+        (MATERIALS_BINDING, Bind::StorageBuffer(shared.materials)),
+        (SHADING_BINDING, Bind::StorageImage(&gbuffer.shading)),
+        (LIGHTS_BINDING, Bind::StorageBuffer(fourth)),
+        (WEIGHTS_BINDING, Bind::StorageBuffer(buffer)),
     ];
+    const _: () = assert!(LIGHTS_BINDING == DISPATCH_BINDING && WEIGHTS_BINDING == TILES_BINDING);
+    // A set binds each resource at its position in the list.
+    let mut binds = Vec::new();
+    for (binding, bind) in numbered {
+        debug_assert_eq!(binding as usize, binds.len());
+        binds.push(bind);
+    }
+    debug_assert_eq!(FIRST_OUTPUT_BINDING as usize, binds.len());
     binds.extend(written.images().into_iter().map(Bind::StorageImage));
-    binds.push(last);
+    binds.extend(rest);
     binds
 }

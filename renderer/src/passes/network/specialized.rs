@@ -108,7 +108,8 @@ impl Destroy for Specialized {
     }
 }
 
-/// The bindings of `network_classify_main.glsl`.
+/// The bindings of `network_classify_main.glsl`: the dispatch arguments where the others have
+/// the lights, and the unit table last.
 fn classify_bindings<'a>(
     gbuffer: &'a GBufferTargets,
     shared: Shared<'a>,
@@ -116,17 +117,7 @@ fn classify_bindings<'a>(
     tiles: &'a Buffer,
     written: Written<'a>,
 ) -> Vec<Bind<'a>> {
-    let mut binds = vec![
-        Bind::StorageImage(&gbuffer.id),
-        Bind::StorageBuffer(shared.materials),
-        Bind::StorageImage(&gbuffer.shading),
-        Bind::StorageBuffer(shared.units),
-        Bind::StorageBuffer(dispatch),
-        Bind::StorageBuffer(tiles),
-        Bind::StorageImage(&gbuffer.surface),
-    ];
-    binds.extend(written.images().into_iter().map(Bind::StorageImage));
-    binds
+    network_bindings(gbuffer, shared, dispatch, tiles, written, [Bind::StorageBuffer(shared.units)])
 }
 
 /// The tile lists of `units` network units at `extent`, and the tiles per unit.
@@ -155,9 +146,8 @@ fn specialized_bindings<'a>(
     written: Written<'a>,
     direct: &'a Direct,
 ) -> Vec<Bind<'a>> {
-    let mut binds = network_bindings(gbuffer, shared, tiles, written, Bind::StorageImage(direct.shadow_maps()));
-    binds.push(Bind::StorageBuffer(shared.units));
-    binds
+    let rest = [Bind::StorageImage(direct.shadow_maps()), Bind::StorageBuffer(shared.units)];
+    network_bindings(gbuffer, shared, shared.lights, tiles, written, rest)
 }
 
 /// `words` as bytes, with at least one word: Vulkan buffers cannot be empty.

@@ -4,6 +4,7 @@
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 
+use super::interface::SEVERAL_LIGHTS_ID;
 use super::layout::UNIT_STRIDE;
 use super::units::NetworkUnit;
 use super::{network_bindings, FrameUses, NetworkOutputs, Shared, Written, TILE};
@@ -66,11 +67,16 @@ impl Storage {
             bytemuck::cast_slice(&weights),
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?);
-        let bindings =
-            network_bindings(gbuffer, shared, &weights, Written::Radiance(outputs), Bind::StorageBuffer(shared.units));
+        let written = Written::Radiance(outputs);
+        let units = Bind::StorageBuffer(shared.units);
+        let bindings = network_bindings(gbuffer, shared, shared.lights, &weights, written, [units]);
         let push = std::mem::size_of::<StoragePush>() as u32;
         // One pipeline for frames of one light, one for several (`SEVERAL_LIGHTS`).
-        let lights = [vec![0], vec![1]];
+        let lights = [0, 1].map(|several| {
+            let mut words = vec![0; SEVERAL_LIGHTS_ID as usize + 1];
+            words[SEVERAL_LIGHTS_ID as usize] = several;
+            words
+        });
         let pass =
             ComputePass::specialized(ctx, "network (storage buffer)", spirv, &bindings, push, (TILE, TILE), &lights)?;
         Ok(Storage { pass, weights: weights.keep() })
@@ -78,8 +84,8 @@ impl Storage {
 
     /// Points the pipelines at the resized G-buffer and outputs.
     pub(super) fn rebind(&mut self, ctx: &Context, gbuffer: &GBufferTargets, shared: Shared, written: Written) {
-        let last = Bind::StorageBuffer(shared.units);
-        self.pass.rebind(ctx, &network_bindings(gbuffer, shared, &self.weights, written, last));
+        let units = Bind::StorageBuffer(shared.units);
+        self.pass.rebind(ctx, &network_bindings(gbuffer, shared, shared.lights, &self.weights, written, [units]));
     }
 
     /// The frame's one dispatch.

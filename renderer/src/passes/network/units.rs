@@ -1,6 +1,9 @@
 //! Network units (an object's part with one direct and one indirect network), the unit table
 //! the shaders read, and the specialization constants of each unit's pipelines.
 
+use super::interface::{
+    ANALYTIC_ID, OBJECTS_ID, OBJECT_FIRST_UNIT_ID, OBJECT_ID, SEVERAL_LIGHTS_ID, TILED_ID, UNIT_ID,
+};
 use super::layout::{FIRST_PARAMETER_ID, PARAMETERS, UNIT_BLEND};
 use super::weights::NetworkWeights;
 use crate::backend::compute::Specialization;
@@ -74,19 +77,22 @@ pub(super) fn specializations(
 ) -> [Specialization; 2] {
     let unit = &units[index];
     let mut words = vec![0u32; FIRST_PARAMETER_ID + 2 * PARAMETERS];
-    words[0] = unit.object as u32 + 1;
-    words[1] = u32::from(tiled);
-    words[2] = u32::from(analytic);
-    words[4] = index as u32;
-    // OBJECT_FIRST_UNIT, OBJECTS.
-    words[5] = units.iter().position(|u| u.object == unit.object).expect("the unit itself") as u32;
-    words[6] = objects.max(1) as u32;
+    let first_unit = units.iter().position(|u| u.object == unit.object).expect("the unit itself");
+    for (id, value) in [
+        (OBJECT_ID, unit.object as u32 + 1),
+        (TILED_ID, u32::from(tiled)),
+        (ANALYTIC_ID, u32::from(analytic)),
+        (UNIT_ID, index as u32),
+        (OBJECT_FIRST_UNIT_ID, first_unit as u32),
+        (OBJECTS_ID, objects.max(1) as u32),
+    ] {
+        words[id as usize] = value;
+    }
     let (direct, indirect) = (unit.direct.folded(), unit.indirect.folded());
     for (word, value) in words[FIRST_PARAMETER_ID..].iter_mut().zip(direct.iter().chain(&indirect)) {
         *word = value.to_bits();
     }
-    // SEVERAL_LIGHTS.
     let mut several = words.clone();
-    several[3] = 1;
+    several[SEVERAL_LIGHTS_ID as usize] = 1;
     [words, several]
 }
