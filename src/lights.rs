@@ -4,6 +4,8 @@
 //! one light, and transport is linear in its emission, so a frame sums the networks once per
 //! copy, each scaled by the copy's colour × intensity.
 
+use std::sync::LazyLock;
+
 use anyhow::{bail, Context, Result};
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::{PlacedLight, Scene};
@@ -16,11 +18,14 @@ use crate::parse::parse_vec3;
 pub const MAX_INTENSITY: f32 = 1000.0;
 
 /// `--help` text of `--light`, shared by the commands that take it.
-pub const LIGHT_HELP: &str =
-    "A light: a copy of the scene's moving light. POSITION is x,y,z in metres, or `default` for \
-     where the glTF puts it; then optionally `:color=R,G,B` (each 0 to 1) and `:intensity=K` (0 to 1000, relative to \
-     the glTF's), e.g. `0.2,0.5,0.3:color=1,0.6,0.3:intensity=2`. Repeat for several lights (at most 16); the \
-     networks are summed over them. Default: one light where the glTF puts it.";
+pub static LIGHT_HELP: LazyLock<String> = LazyLock::new(|| {
+    format!(
+        "A light: a copy of the scene's moving light. POSITION is x,y,z in metres, or `default` for where the glTF \
+         puts it; then optionally `:color=R,G,B` (each 0 to 1) and `:intensity=K` (0 to {MAX_INTENSITY}, relative to \
+         the glTF's), e.g. `0.2,0.5,0.3:color=1,0.6,0.3:intensity=2`. Repeat for several lights (at most \
+         {MAX_LIGHTS}); the networks are summed over them. Default: one light where the glTF puts it."
+    )
+});
 
 /// One `--light` value: `POSITION[:color=R,G,B][:intensity=K]`, with POSITION `x,y,z` or
 /// `default` (`default_position`).

@@ -8,8 +8,8 @@ use rrf_baker::glam::{Vec2, Vec3, Vec4};
 use rrf_baker::model::Model;
 use rrf_baker::predict::{predict_image, Direct};
 use rrf_baker::scene::{
-    Aabb, AlphaMode, BakePresets, ColorSpace, Cone, LightKind, Material, MovingLight, Object, Part, PlacedLight,
-    PointLight, Scene, Texture, TextureRef, UvTransform, View,
+    Aabb, AlphaMode, BakePresets, ColorSpace, Cone, LightKind, Material, MaterialRange, MovingLight, Object,
+    PlacedLight, PointLight, Scene, Texture, TextureRef, UvTransform, View,
 };
 use rrf_baker::trace::integrator::trace_ray;
 use rrf_baker::trace::sampling::Rng;
@@ -124,7 +124,7 @@ fn scene(meshes: Vec<(Mesh, Material)>, point_lights: Vec<PointLight>) -> Scene 
             positions: mesh.positions,
             normals: mesh.normals,
             triangles: mesh.triangles,
-            parts: vec![Part { material: i as u32, triangles: 0..n }],
+            parts: vec![MaterialRange { material: i as u32, triangles: 0..n }],
         });
         materials.push(mat);
     }

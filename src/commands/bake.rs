@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{anyhow, bail, Context, Result};
 use clap::{Args, ValueEnum};
 use rrf_baker::bake::lock::{BakeLock, Contended};
-use rrf_baker::bake::{bake_part, BakeProgress, BakeReport, BakeSettings, Part, Quality, Stage, Trained};
+use rrf_baker::bake::{bake_part, BakePart, BakeProgress, BakeReport, BakeSettings, Quality, Stage, Trained};
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
 use serde_json::json;
@@ -152,8 +152,8 @@ fn check_output(output: &Path) -> Result<()> {
 }
 
 /// What a stage's shard did, in a line (of JSON with `--json`).
-fn report_stage(args: &BakeArgs, cache: &Path, part: Part, report: &BakeReport) -> Result<()> {
-    let Part::Stage { stage, index, count } = part else { return Ok(()) };
+fn report_stage(args: &BakeArgs, cache: &Path, part: BakePart, report: &BakeReport) -> Result<()> {
+    let BakePart::Stage { stage, index, count } = part else { return Ok(()) };
     if args.json {
         let line = json!({
             "stage": stage.name(), "shard": index, "shards": count, "cache": cache,
@@ -230,16 +230,16 @@ pub fn run(args: &BakeArgs) -> Result<()> {
                 StageArg::Aim => Stage::Aim,
                 StageArg::Train => Stage::Train,
             };
-            Part::Stage { stage, index, count }
+            BakePart::Stage { stage, index, count }
         }
-        (_, _, true) => Part::Merge,
-        _ => Part::Whole,
+        (_, _, true) => BakePart::Merge,
+        _ => BakePart::Whole,
     };
     // Shards of a stage run side by side and write only their own cache files; the model is
     // written by one process, under the lock.
     let lock = match part {
-        Part::Stage { .. } => None,
-        Part::Whole | Part::Merge => {
+        BakePart::Stage { .. } => None,
+        BakePart::Whole | BakePart::Merge => {
             let contended = if args.wait { Contended::Wait(announce_wait) } else { Contended::Refuse };
             Some(BakeLock::acquire(&output, contended)?)
         }

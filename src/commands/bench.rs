@@ -1,6 +1,6 @@
 //! `rrf bench`: GPU time per pass from timestamp queries, median over frames.
 
-use std::path::PathBuf;
+use std::sync::LazyLock;
 use std::time::Instant;
 
 use anyhow::{bail, Result};
@@ -13,9 +13,11 @@ use rrf_renderer::frame::{Frame, FrameConstants, FrameOutput, Shown, TIMESTAMPS}
 use rrf_renderer::{vk, Context, ContextOptions, Validation};
 use serde_json::json;
 
+use super::scene_args::SceneArgs;
 use super::variant::VariantArg;
 use crate::direct_mode::DirectMode;
 use crate::frame_stats::{median, Stats};
+use crate::lights::MAX_LIGHTS;
 use crate::scene_frame::{FrameSettings, SceneFrame};
 
 /// Frames run before timing starts.
@@ -59,12 +61,18 @@ fn parse_variants(s: &str) -> Result<Variants, String> {
     })
 }
 
+/// `--help` text of `--lights`.
+static LIGHTS_HELP: LazyLock<String> = LazyLock::new(|| {
+    format!(
+        "Numbers of lights to time, e.g. 1,2,4: copies of the moving light spread through its box (each 1 to \
+         {MAX_LIGHTS}). With two or more, the cost of each extra light is printed."
+    )
+});
+
 #[derive(Args, Debug)]
 pub struct BenchArgs {
-    #[arg(help = super::SCENE_HELP)]
-    pub scene: PathBuf,
-    #[arg(long, help = super::MODEL_HELP)]
-    pub model: Option<PathBuf>,
+    #[command(flatten)]
+    pub input: SceneArgs,
     /// A named view; default: the glTF camera.
     #[arg(long)]
     pub view: Option<String>,
@@ -83,11 +91,8 @@ pub struct BenchArgs {
     /// (the walkthrough's frame), `both` times each.
     #[arg(long, value_enum, default_value_t = OutputArg::Both)]
     pub output: OutputArg,
-    #[arg(long, value_enum, default_value_t = DirectMode::Auto, help = super::DIRECT_HELP)]
-    pub direct: DirectMode,
-    /// Numbers of lights to time, e.g. 1,2,4: copies of the moving light spread through its
-    /// box (each 1 to 16). With two or more, the cost of each extra light is printed.
-    #[arg(long, default_value = "1", value_delimiter = ',', value_parser = clap::value_parser!(u32).range(1..=16))]
+    #[arg(long, default_value = "1", value_delimiter = ',', help = LIGHTS_HELP.as_str(),
+          value_parser = clap::value_parser!(u32).range(1..=MAX_LIGHTS as i64))]
     pub lights: Vec<u32>,
     /// The device's fp32 peak in GFLOP/s, to report the fraction the network pass reaches.
     #[arg(long)]
@@ -99,10 +104,9 @@ pub struct BenchArgs {
 
 pub fn run(args: &BenchArgs) -> Result<()> {
     let (width, height) = crate::parse::parse_size(&args.size)?;
-    let scene = Scene::load(&args.scene)?;
-    let model = Model::load(&args.model.clone().unwrap_or_else(|| scene.model_file()), Some(&scene))?;
-    let view = super::view_args::named_view(&scene, args.view.as_deref())?;
-    args.direct.check(&scene, &model)?;
+    let (scene, model) = args.input.load()?;
+    let view = super::image_args::named_view(&scene, args.view.as_deref())?;
+    args.input.direct.check(&scene, &model)?;
     // Timing runs without the validation layer unless RRF_VALIDATION asks for it.
     let mut options = ContextOptions::from_env();
     if std::env::var_os("RRF_VALIDATION").is_none() {
@@ -162,7 +166,7 @@ impl Bench<'_> {
     ) -> Result<serde_json::Value> {
         let (ctx, scene, model, args) = (self.ctx, self.scene, self.model, self.args);
         let setup = Instant::now();
-        let direct = args.direct.resolve(scene, Some(variant.0));
+        let direct = args.input.direct.resolve(scene, Some(variant.0));
         direct.check(scene, model)?;
         let frame = SceneFrame::new(ctx, scene, model, variant.0, vk::Extent2D { width, height }, output, direct)?;
         let setup_ms = setup.elapsed().as_secs_f64() * 1e3;

@@ -17,7 +17,8 @@ use rrf_renderer::frame::{FrameOutput, Shown};
 use rrf_renderer::passes::network::Variant;
 use rrf_renderer::{vk, Context, ContextOptions};
 
-use super::view_args::PixelFootprint;
+use super::image_args::PixelFootprint;
+use super::scene_args::SceneArgs;
 use crate::direct_mode::DirectMode;
 use crate::eval::configs::{held_out, EvalConfig};
 use crate::eval::figure::{compose, Panel};
@@ -36,10 +37,8 @@ const FLOOR_STREAM: u64 = 0xf100_0000_0000_0001;
 
 #[derive(Args, Debug)]
 pub struct EvalArgs {
-    #[arg(help = super::SCENE_HELP)]
-    pub scene: PathBuf,
-    #[arg(long, help = super::MODEL_HELP)]
-    pub model: Option<PathBuf>,
+    #[command(flatten)]
+    pub input: SceneArgs,
     /// Random configurations (Latin hypercube over the light and camera boxes), on top of one
     /// per named view of the sidecar; 0 to 10,000.
     #[arg(long, default_value_t = 6, value_parser = clap::value_parser!(u32).range(0..=10_000))]
@@ -69,8 +68,6 @@ pub struct EvalArgs {
     /// Where to cache the references; default: .cache/references/ in the scene's folder.
     #[arg(long, value_name = "DIR")]
     pub cache: Option<PathBuf>,
-    #[arg(long, value_enum, default_value_t = DirectMode::Auto, help = super::DIRECT_HELP)]
-    pub direct: DirectMode,
     /// Where in its pixel each reference path starts. `centre` traces the ray whose hit the
     /// G-buffer rasterises, so the scores are the networks' error alone; `area` scores against
     /// antialiased references, which adds the raster's aliasing at edges and in textures (the
@@ -105,15 +102,15 @@ fn gpu_predictor(
 
 pub fn run(args: &EvalArgs) -> Result<()> {
     let (width, height) = crate::parse::parse_size(&args.size)?;
-    let scene = Scene::load(&args.scene)?;
-    let model_path = args.model.clone().unwrap_or_else(|| scene.model_file());
+    let scene = Scene::load(&args.input.scene)?;
+    let model_path = args.input.model.clone().unwrap_or_else(|| scene.model_file());
     let model = Model::load(&model_path, Some(&scene))?;
     let geometry = Geometry::new(&scene);
     let configs = held_out(&scene, &geometry, args.configs as usize, args.seed)?;
     std::fs::create_dir_all(&args.output).with_context(|| format!("cannot create {}", args.output.display()))?;
 
     // The GPU predictions use the tiled variant, which does everything the CPU inference does.
-    let direct = args.direct.resolve(&scene, None);
+    let direct = args.input.direct.resolve(&scene, None);
     direct.check(&scene, &model)?;
     let predictor = if args.cpu {
         Predictor::Cpu(direct)

@@ -1,6 +1,5 @@
-//! Options shared by the commands that make an image: which view, where the light is, how big.
-
-use std::path::PathBuf;
+//! Options shared by the commands that make an image (`render`, `reference`): which view,
+//! where the lights are, how big, and which term of the radiance.
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
@@ -11,9 +10,7 @@ use rrf_baker::trace::{Footprint, Radiance};
 use crate::parse::{parse_exposure, parse_size, parse_vec3};
 
 #[derive(Args, Clone, Debug)]
-pub struct ViewArgs {
-    #[arg(help = super::SCENE_HELP)]
-    pub scene: PathBuf,
+pub struct ImageArgs {
     /// A named view from the scene (see `rrf info SCENE`); default: the glTF camera.
     #[arg(long, conflicts_with = "camera")]
     pub view: Option<String>,
@@ -21,7 +18,7 @@ pub struct ViewArgs {
     /// field of view is the default view's.
     #[arg(long, value_name = "EYE:TARGET", allow_hyphen_values = true)]
     pub camera: Option<String>,
-    #[arg(long, help = crate::lights::LIGHT_HELP, value_name = "POSITION[:color=R,G,B][:intensity=K]", allow_hyphen_values = true)]
+    #[arg(long, help = crate::lights::LIGHT_HELP.as_str(), value_name = "POSITION[:color=R,G,B][:intensity=K]", allow_hyphen_values = true)]
     pub light: Vec<String>,
     /// Image size in pixels, each side 1 to 16384.
     #[arg(long, default_value = "256x256", value_name = "WxH")]
@@ -32,7 +29,7 @@ pub struct ViewArgs {
 }
 
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Component {
+pub enum RadianceTerm {
     /// Everything: emitted + direct + indirect.
     Gi,
     /// Light that reached the surface straight from a light source.
@@ -43,13 +40,13 @@ pub enum Component {
     Emitted,
 }
 
-impl Component {
+impl RadianceTerm {
     pub fn pick(self, r: &Radiance) -> Vec3 {
         match self {
-            Component::Gi => r.gi(),
-            Component::Direct => r.direct,
-            Component::Indirect => r.indirect,
-            Component::Emitted => r.emitted,
+            RadianceTerm::Gi => r.gi(),
+            RadianceTerm::Direct => r.direct,
+            RadianceTerm::Indirect => r.indirect,
+            RadianceTerm::Emitted => r.emitted,
         }
     }
 }
@@ -94,7 +91,7 @@ pub fn named_view(scene: &Scene, name: Option<&str>) -> Result<View> {
     })
 }
 
-impl ViewArgs {
+impl ImageArgs {
     pub fn size(&self) -> Result<(u32, u32)> {
         parse_size(&self.size)
     }

@@ -3,13 +3,14 @@
 pub mod bake;
 pub mod bench;
 pub mod eval;
+pub mod image_args;
 pub mod info;
 pub mod init;
 pub mod reference;
 pub mod render;
+pub mod scene_args;
 pub mod variant;
 pub mod view;
-pub mod view_args;
 
 /// The --model flag of the commands that render from a model.
 pub const MODEL_HELP: &str = "Model file; default: model.safetensors beside scene.gltf or scene.glb, \

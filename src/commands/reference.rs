@@ -9,14 +9,16 @@ use rrf_baker::scene::Scene;
 use rrf_baker::trace::{render, Camera, Geometry, RenderSettings, TraceSettings, World};
 use serde_json::json;
 
-use super::view_args::{Component, PixelFootprint, ViewArgs};
+use super::image_args::{ImageArgs, PixelFootprint, RadianceTerm};
 use crate::image_out::{check_output, write_image};
 use crate::progress::Progress;
 
 #[derive(Args, Debug)]
 pub struct ReferenceArgs {
+    #[arg(help = super::SCENE_HELP)]
+    pub scene: PathBuf,
     #[command(flatten)]
-    pub view: ViewArgs,
+    pub image: ImageArgs,
     /// Samples (paths) per pixel, 1 to 1,048,576.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
     pub spp: u32,
@@ -28,8 +30,8 @@ pub struct ReferenceArgs {
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(0..=1024))]
     pub rr_depth: u32,
     /// Which light to show.
-    #[arg(long, value_enum, default_value_t = Component::Gi)]
-    pub component: Component,
+    #[arg(long, value_enum, default_value_t = RadianceTerm::Gi)]
+    pub component: RadianceTerm,
     /// Random seed, any 64-bit integer: the same seed gives the same image.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -46,14 +48,14 @@ pub struct ReferenceArgs {
 }
 
 pub fn run(args: &ReferenceArgs) -> Result<()> {
-    let (width, height) = args.view.size()?;
+    let (width, height) = args.image.size()?;
     check_output(&args.output)?;
-    let scene = Scene::load(&args.view.scene)?;
+    let scene = Scene::load(&args.scene)?;
     for warning in &scene.warnings {
         eprintln!("warning: {warning}");
     }
-    let view = args.view.resolve_view(&scene)?;
-    let lights = args.view.lights(&scene)?;
+    let view = args.image.resolve_view(&scene)?;
+    let lights = args.image.lights(&scene)?;
     let geometry = Geometry::new(&scene);
     let world = World::with_lights(&scene, &geometry, &lights);
     let camera = Camera::new(&view, width as f32 / height as f32);
@@ -73,7 +75,7 @@ pub fn run(args: &ReferenceArgs) -> Result<()> {
     progress.finish();
 
     let pixels = image.component(|r| args.component.pick(r));
-    write_image(&args.output, width, height, &pixels, args.view.exposure)?;
+    write_image(&args.output, width, height, &pixels, args.image.exposure)?;
     let paths = u64::from(width) * u64::from(height) * u64::from(args.spp);
     let summary = json!({
         "scene": scene.name,

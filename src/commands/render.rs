@@ -13,9 +13,9 @@ use rrf_baker::trace::{Camera, Geometry, World};
 use rrf_renderer::frame::{FrameOutput, Shown};
 use rrf_renderer::{vk, Context, ContextOptions};
 
-use super::bake::model_to_render;
+use super::image_args::{ImageArgs, RadianceTerm};
+use super::scene_args::SceneArgs;
 use super::variant::VariantArg;
-use super::view_args::{Component, ViewArgs};
 use crate::direct_mode::DirectMode;
 use crate::image_out::{check_output, write_image};
 use crate::scene_frame::{rgb, FrameSettings, SceneFrame};
@@ -23,14 +23,12 @@ use crate::scene_frame::{rgb, FrameSettings, SceneFrame};
 #[derive(Args, Debug)]
 pub struct RenderArgs {
     #[command(flatten)]
-    pub view: ViewArgs,
-    #[arg(long, help = super::MODEL_HELP)]
-    pub model: Option<PathBuf>,
+    pub input: SceneArgs,
+    #[command(flatten)]
+    pub image: ImageArgs,
     /// Which light to show.
-    #[arg(long, value_enum, default_value_t = Component::Gi)]
-    pub component: Component,
-    #[arg(long, value_enum, default_value_t = DirectMode::Auto, help = super::DIRECT_HELP)]
-    pub direct: DirectMode,
+    #[arg(long, value_enum, default_value_t = RadianceTerm::Gi)]
+    pub component: RadianceTerm,
     /// How the networks reach the shader (GPU only).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
     pub variant: VariantArg,
@@ -44,13 +42,12 @@ pub struct RenderArgs {
 }
 
 pub fn run(args: &RenderArgs) -> Result<()> {
-    let (width, height) = args.view.size()?;
+    let (width, height) = args.image.size()?;
     check_output(&args.output)?;
-    let scene = Scene::load(&args.view.scene)?;
-    let model = model_to_render(&scene, args.model.as_deref())?;
-    let view = args.view.resolve_view(&scene)?;
-    let lights = args.view.lights(&scene)?;
-    let direct = args.direct.resolve(&scene, (!args.cpu).then_some(args.variant.0));
+    let (scene, model) = args.input.load()?;
+    let view = args.image.resolve_view(&scene)?;
+    let lights = args.image.lights(&scene)?;
+    let direct = args.input.direct.resolve(&scene, (!args.cpu).then_some(args.variant.0));
     direct.check(&scene, &model)?;
     let start = Instant::now();
     let (pixels, how) = if args.cpu {
@@ -64,7 +61,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         gpu_render(&scene, &model, &target, &view, lights, args.component)?
     };
     let seconds = start.elapsed().as_secs_f64();
-    write_image(&args.output, width, height, &pixels, args.view.exposure)?;
+    write_image(&args.output, width, height, &pixels, args.image.exposure)?;
     eprintln!("wrote {} ({width}x{height}, {how}, {:.0} ms)", args.output.display(), seconds * 1e3);
     Ok(())
 }
@@ -83,7 +80,7 @@ fn gpu_render(
     target: &GpuTarget,
     view: &View,
     lights: Vec<PlacedLight>,
-    component: Component,
+    component: RadianceTerm,
 ) -> Result<(Vec<Vec3>, String)> {
     let (variant, (width, height)) = (target.variant, target.size);
     let ctx = Context::new(&ContextOptions::from_env())?;
@@ -103,10 +100,10 @@ fn gpu_render(
     }
     let rendered = rendered?;
     let rgba = match component {
-        Component::Gi => &rendered.gi,
-        Component::Direct => &rendered.direct,
-        Component::Indirect => &rendered.indirect,
-        Component::Emitted => bail!("--component emitted is only available from `rrf reference`"),
+        RadianceTerm::Gi => &rendered.gi,
+        RadianceTerm::Direct => &rendered.direct,
+        RadianceTerm::Indirect => &rendered.indirect,
+        RadianceTerm::Emitted => bail!("--component emitted is only available from `rrf reference`"),
     };
     Ok((rgb(rgba), device))
 }

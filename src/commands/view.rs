@@ -1,17 +1,17 @@
 //! `rrf view`: the interactive walkthrough, or a scripted run of it.
 
 use std::path::PathBuf;
+use std::sync::LazyLock;
 
 use anyhow::{bail, Context as _, Result};
 use clap::{Args, ValueEnum};
-use rrf_baker::scene::Scene;
 use rrf_renderer::{backend::swapchain, vk, Context, ContextOptions};
 
-use super::bake::model_to_render;
+use super::image_args::named_view;
+use super::scene_args::SceneArgs;
 use super::variant::VariantArg;
-use super::view_args::named_view;
-use crate::direct_mode::DirectMode;
 use crate::parse::parse_size;
+use crate::viewer::controls::HELP_TEXT;
 use crate::viewer::gpu::ViewerGpu;
 use crate::viewer::script::Script;
 use crate::viewer::state::ViewerState;
@@ -38,22 +38,18 @@ impl PresentMode {
 }
 
 #[derive(Args, Debug)]
-#[command(after_long_help = CONTROLS)]
+#[command(after_long_help = AFTER_HELP.as_str())]
 pub struct ViewArgs {
-    #[arg(help = super::SCENE_HELP)]
-    pub scene: PathBuf,
-    #[arg(long, help = super::MODEL_HELP)]
-    pub model: Option<PathBuf>,
+    #[command(flatten)]
+    pub input: SceneArgs,
     /// A named view to start from (see `rrf info SCENE`); default: the glTF camera.
     #[arg(long)]
     pub view: Option<String>,
-    #[arg(long, help = crate::lights::LIGHT_HELP, value_name = "POSITION[:color=R,G,B][:intensity=K]", allow_hyphen_values = true)]
+    #[arg(long, help = crate::lights::LIGHT_HELP.as_str(), value_name = "POSITION[:color=R,G,B][:intensity=K]", allow_hyphen_values = true)]
     pub light: Vec<String>,
     /// Window size (or frame size when headless) in pixels, each side 1 to 16384.
     #[arg(long, default_value = "960x540", value_name = "WxH")]
     pub size: String,
-    #[arg(long, value_enum, default_value_t = DirectMode::Auto, help = super::DIRECT_HELP)]
-    pub direct: DirectMode,
     /// How the networks reach the shader (see `rrf render --help`).
     #[arg(long, value_enum, default_value_t = VariantArg::DEFAULT)]
     pub variant: VariantArg,
@@ -85,16 +81,11 @@ pub struct ViewArgs {
     pub headless: bool,
 }
 
-const CONTROLS: &str = "\
-Controls (H shows them in the window):
-  W A S D  move           Q E  down, up         Shift  faster      wheel  speed
-  right mouse button held: look around
-  arrows, Page Up/Down: move the selected light, kept inside the box the model was trained for
-  L: add a light where the selected one is   Tab: select the next light   Delete: remove it
-  C: the selected light's colour (white, warm, cool, red, green, blue)   - =: dim, brighten it
-  1 2 3: global, direct only, indirect only     [ ]: exposure
-  P: screenshot (the path is printed)   R: reset view and light   O: overlay   H: help   Esc: quit
+/// `rrf view --help`'s text after the flags: the controls, the script format, headless runs.
+static AFTER_HELP: LazyLock<String> =
+    LazyLock::new(|| format!("Controls (H shows them in the window):\n{}\n{SCRIPT_HELP}", *HELP_TEXT));
 
+const SCRIPT_HELP: &str = "\
 Script format (--script): one event per line, TIME COMMAND ARGUMENTS, TIME in seconds of script
 time, which advances by 1/60 s per frame whatever the frame rate; # starts a comment.
   camera X,Y,Z X,Y,Z [over S]    eye and target; with `over`, move there in S seconds
@@ -123,11 +114,10 @@ pub fn run(args: &ViewArgs) -> Result<()> {
             bail!("--screenshot {}: the file must end in .png", path.display());
         }
     }
-    let scene = Scene::load(&args.scene)?;
-    let model = model_to_render(&scene, args.model.as_deref())?;
+    let (scene, model) = args.input.load()?;
     let view = named_view(&scene, args.view.as_deref())?;
     let lights = crate::lights::lights_from_args(&scene, &args.light)?;
-    let direct = args.direct.resolve(&scene, Some(args.variant.0));
+    let direct = args.input.direct.resolve(&scene, Some(args.variant.0));
     direct.check(&scene, &model)?;
     let mut state = ViewerState::new(&scene, view, lights);
     state.overlay = !args.no_overlay;

@@ -1,6 +1,7 @@
 //! `rrf view`: the interactive walkthrough, in a window (winit) or headless, driven by the
 //! keyboard and mouse or by a script.
 
+pub mod controls;
 pub mod gpu;
 pub mod script;
 pub mod state;

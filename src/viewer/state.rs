@@ -8,6 +8,7 @@ use rrf_baker::scene::{Aabb, PlacedLight, Scene, View};
 use rrf_renderer::frame::{Shown, TIMED_PASSES};
 use rrf_renderer::passes::overlay::{Colour, TextGrid};
 
+use super::controls::help_lines;
 use super::script::Action;
 use crate::direct_mode::DirectMode;
 use crate::frame_stats::Stats;
@@ -382,7 +383,7 @@ impl ViewerState {
         ));
         if self.help {
             lines.push((String::new(), Colour::White));
-            lines.extend(HELP.iter().map(|h| (h.to_string(), Colour::White)));
+            lines.extend(help_lines(HELP_WIDTH).into_iter().map(|h| (h, Colour::White)));
         } else {
             lines.push(("H: help".into(), Colour::White));
         }
@@ -395,6 +396,9 @@ impl ViewerState {
     }
 }
 
+/// Characters per line of the overlay's help.
+const HELP_WIDTH: usize = 64;
+
 /// The colours the `C` key steps through: white, warm, cool, red, green, blue.
 pub const COLOURS: [Vec3; 6] = [
     Vec3::ONE,
@@ -403,18 +407,6 @@ pub const COLOURS: [Vec3; 6] = [
     Vec3::new(1.0, 0.25, 0.2),
     Vec3::new(0.3, 1.0, 0.3),
     Vec3::new(0.3, 0.4, 1.0),
-];
-
-/// The controls, as the overlay shows them.
-pub const HELP: [&str; 8] = [
-    "W A S D: move   Q E: down, up   Shift: faster   wheel: speed",
-    "right mouse button held: look around",
-    "arrows, Page Up/Down: move the light (inside its trained box)",
-    "L: add a light here   Tab: next light   Delete: remove it",
-    "C: its colour   - =: dim, brighten it",
-    "1 2 3: global, direct, indirect light   [ ]: exposure",
-    "P: screenshot   R: reset view and light   O: overlay",
-    "H: hide this help   Esc: quit",
 ];
 
 #[cfg(test)]

@@ -7,7 +7,7 @@
 //! byte-identical to an uninterrupted bake with the same seed: every shard and network is a
 //! pure function of its key, and the model records no timings.
 //!
-//! The same property splits a bake across machines ([`Part`]): each stage (sampling, aimed
+//! The same property splits a bake across machines ([`BakePart`]): each stage (sampling, aimed
 //! sampling, training) runs as disjoint shards that write only their own cache files into a
 //! shared folder, and a merge reads them all and writes the model, the same bytes as a bake
 //! on one machine.
@@ -313,7 +313,7 @@ impl Stage {
 
 /// How much of a bake one process runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Part {
+pub enum BakePart {
     /// Everything, computing what the cache lacks, then the model.
     Whole,
     /// Shard `index` of `count` of one stage: every `count`-th shard file (or network) from
@@ -343,13 +343,13 @@ impl Work {
     }
 }
 
-impl Part {
+impl BakePart {
     /// What this part does in `stage`; `None` once its own stage is done.
     fn work(self, stage: Stage) -> Option<Work> {
         match self {
-            Part::Whole => Some(Work::All),
-            Part::Merge => Some(Work::Read),
-            Part::Stage { stage: own, index, count } => match stage.cmp(&own) {
+            BakePart::Whole => Some(Work::All),
+            BakePart::Merge => Some(Work::Read),
+            BakePart::Stage { stage: own, index, count } => match stage.cmp(&own) {
                 std::cmp::Ordering::Less => Some(Work::Read),
                 std::cmp::Ordering::Equal => Some(Work::Share { index: index as usize, count: count as usize }),
                 std::cmp::Ordering::Greater => None,
@@ -365,18 +365,18 @@ pub fn bake(
     cache: &Path,
     progress: &dyn BakeProgress,
 ) -> Result<(Model, BakeReport), BakeError> {
-    let (model, report) = bake_part(scene, settings, cache, progress, Part::Whole)?;
+    let (model, report) = bake_part(scene, settings, cache, progress, BakePart::Whole)?;
     Ok((model.expect("a whole bake ends with a model"), report))
 }
 
-/// Runs `part` of a bake of `scene` on `cache`: the model for [`Part::Whole`] and
-/// [`Part::Merge`], `None` for a stage's shard, whose work is its cache files.
+/// Runs `part` of a bake of `scene` on `cache`: the model for [`BakePart::Whole`] and
+/// [`BakePart::Merge`], `None` for a stage's shard, whose work is its cache files.
 pub fn bake_part(
     scene: &Scene,
     settings: &BakeSettings,
     cache: &Path,
     progress: &dyn BakeProgress,
-    part: Part,
+    part: BakePart,
 ) -> Result<(Option<Model>, BakeReport), BakeError> {
     let (Some(light), Some(camera)) = (&scene.moving_light, &scene.camera_box) else {
         return Err(BakeError::NoDomains { scene: scene.gltf_path.clone(), sidecar: scene.sidecar_file() });
@@ -464,21 +464,77 @@ pub fn bake_part(
 
     // Training: two networks per object that has samples (one with `Trained::IndirectOnly`).
     let start = Instant::now();
+    let lent = lend_samples(scene, settings, &all);
+    let TrainingPlan { by_object, jobs, untrained, borrowed } = plan_training(scene, settings, &all, &lent)?;
+    let mine: Vec<(u32, Component)> =
+        jobs.iter().enumerate().filter(|(i, _)| train_work.mine(*i)).map(|(_, &job)| job).collect();
+    let trainer = Trainer { scene, settings, cache, progress, work: train_work, corrupt: &corrupt };
+    let (networks, resumed_networks) = trainer.train(&mine, &by_object)?;
+    report.train_seconds = start.elapsed().as_secs_f64();
+    report.resumed_networks = resumed_networks;
+    report.networks = networks.len();
+    report.corrupt_files = corrupt.into_inner();
+    if matches!(train_work, Work::Share { .. }) {
+        return Ok((None, report));
+    }
+
+    let metadata = Metadata {
+        format_version: FORMAT_VERSION,
+        scene: scene.name.clone(),
+        scene_hash: format!("{:016x}", scene.content_hash),
+        inputs: INPUT_NAMES.iter().map(|s| s.to_string()).collect(),
+        layers: vec![HIDDEN1, HIDDEN2, OUTPUTS],
+        activation: "tanh".into(),
+        networks: networks.iter().map(|(_, info)| info.clone()).collect(),
+        untrained,
+        borrowed,
+        bake: serde_json::to_value(settings).expect("settings serialise"),
+        blend_band: settings.blend_band,
+        checksum: String::new(),
+    };
+    let model = Model { metadata, networks: networks.into_iter().map(|(n, _)| n).collect() };
+    Ok((Some(model), report))
+}
+
+/// Which networks a bake trains, and on which samples.
+struct TrainingPlan<'a> {
+    /// Per object, its samples, and those it borrows from its neighbours.
+    by_object: Vec<Vec<&'a Sample>>,
+    /// (object, component) of every network to train, in a fixed order.
+    jobs: Vec<(u32, Component)>,
+    untrained: Vec<Untrained>,
+    borrowed: Vec<Untrained>,
+}
+
+/// Per object, the samples it borrows from its neighbours (see [`borrow_samples`]) if it
+/// learns and `all` holds fewer than `min_samples` of its own.
+fn lend_samples(scene: &Scene, settings: &BakeSettings, all: &[Sample]) -> Vec<Option<(Vec<Sample>, String)>> {
+    let mut counts = vec![0usize; scene.objects.len()];
+    all.iter().for_each(|s| counts[s.object as usize] += 1);
+    let short = |id: u32| learns(scene, id) && counts[id as usize] < settings.min_samples;
+    scene
+        .objects
+        .iter()
+        .map(|o| short(o.id).then(|| borrow_samples(scene, all, o.id, settings.min_samples)).flatten())
+        .collect()
+}
+
+/// The networks to train from `all` the samples: both components (or what
+/// `settings.trained` keeps) of every object that learns and has `min_samples`, with the
+/// samples `lent` to it where it has too few; an error that says why if there are none.
+fn plan_training<'a>(
+    scene: &Scene,
+    settings: &BakeSettings,
+    all: &'a [Sample],
+    lent: &'a [Option<(Vec<Sample>, String)>],
+) -> Result<TrainingPlan<'a>, BakeError> {
     let mut by_object: Vec<Vec<&Sample>> = vec![Vec::new(); scene.objects.len()];
-    for s in &all {
+    for s in all {
         by_object[s.object as usize].push(s);
     }
     let mut untrained = Vec::new();
     let mut borrowed = Vec::new();
     let mut jobs = Vec::new();
-    let lent: Vec<Option<(Vec<Sample>, String)>> = scene
-        .objects
-        .iter()
-        .map(|o| {
-            let short = learns(scene, o.id) && by_object[o.id as usize].len() < settings.min_samples;
-            short.then(|| borrow_samples(scene, &all, o.id, settings.min_samples)).flatten()
-        })
-        .collect();
     for object in &scene.objects {
         if !learns(scene, object.id) {
             continue; // emitters show their emission; no network
@@ -524,79 +580,77 @@ pub fn bake_part(
         };
         return Err(BakeError::NoNetworks { scene: scene.gltf_path.clone(), cause });
     }
-    let trained = AtomicU64::new(0);
-    let resumed_networks = AtomicUsize::new(0);
-    let settings_key = serde_json::to_string(settings).expect("settings serialise");
-    let mine: Vec<(u32, Component)> =
-        jobs.iter().enumerate().filter(|(i, _)| train_work.mine(*i)).map(|(_, &job)| job).collect();
-    let networks: Vec<Vec<(Network, NetworkInfo)>> = mine
-        .par_iter()
-        .map(|&(object, component)| {
-            let mut key = cache_key(scene, &settings_key);
-            key.write(&[component as u8]);
-            key.write(&object.to_le_bytes());
-            let path = cache.join(format!("network-{object:05}-{}.bin", component.name()));
-            let checkpoint: Option<Vec<(Network, NetworkInfo)>> =
-                cache::read(&path, NETWORK_MAGIC, key.0, &corrupt, |bytes| {
-                    let Checkpoint { leaves } = serde_json::from_slice(bytes).ok()?;
-                    leaves
-                        .into_iter()
-                        .map(|Leaf { info, params }| Some((info.network(params, settings.blend_band)?, info)))
-                        .collect()
-                });
-            let leaves = match checkpoint {
-                Some(resumed) => {
-                    resumed_networks.fetch_add(resumed.len(), Ordering::SeqCst);
-                    resumed
-                }
-                None if matches!(train_work, Work::Read) => {
-                    return Err(BakeError::MissingStage { path, stage: Stage::Train.name() })
-                }
-                None => {
-                    let leaves = train_tree(scene, settings, object, component, &by_object[object as usize]);
-                    let checkpoint = Checkpoint {
-                        leaves: leaves
-                            .iter()
-                            .map(|(n, info)| Leaf { info: info.clone(), params: n.params.clone() })
-                            .collect(),
-                    };
-                    let json = serde_json::to_vec(&checkpoint).expect("checkpoint serialises");
-                    cache::write(&path, NETWORK_MAGIC, key.0, &json)?;
-                    leaves
-                }
-            };
-            let d = trained.fetch_add(1, Ordering::SeqCst) + 1;
-            progress.trained(d, mine.len() as u64);
-            Ok(leaves)
-        })
-        .collect::<Vec<_>>()
-        .into_iter()
-        .collect::<Result<_, BakeError>>()?; // the first error in job order, the same on every run
-    let networks: Vec<(Network, NetworkInfo)> = networks.into_iter().flatten().collect();
-    report.train_seconds = start.elapsed().as_secs_f64();
-    report.resumed_networks = resumed_networks.into_inner();
-    report.networks = networks.len();
-    report.corrupt_files = corrupt.into_inner();
-    if matches!(train_work, Work::Share { .. }) {
-        return Ok((None, report));
-    }
+    Ok(TrainingPlan { by_object, jobs, untrained, borrowed })
+}
 
-    let metadata = Metadata {
-        format_version: FORMAT_VERSION,
-        scene: scene.name.clone(),
-        scene_hash: format!("{:016x}", scene.content_hash),
-        inputs: INPUT_NAMES.iter().map(|s| s.to_string()).collect(),
-        layers: vec![HIDDEN1, HIDDEN2, OUTPUTS],
-        activation: "tanh".into(),
-        networks: networks.iter().map(|(_, info)| info.clone()).collect(),
-        untrained,
-        borrowed,
-        bake: serde_json::to_value(settings).expect("settings serialise"),
-        blend_band: settings.blend_band,
-        checksum: String::new(),
-    };
-    let model = Model { metadata, networks: networks.into_iter().map(|(n, _)| n).collect() };
-    Ok((Some(model), report))
+/// Trains (or reads back from the cache) the networks of a bake part's share of the jobs.
+struct Trainer<'a> {
+    scene: &'a Scene,
+    settings: &'a BakeSettings,
+    cache: &'a Path,
+    progress: &'a dyn BakeProgress,
+    work: Work,
+    corrupt: &'a AtomicUsize,
+}
+
+impl Trainer<'_> {
+    /// The leaves of every (object, component) of `jobs`, in job order, each from its
+    /// checkpoint if the cache holds a valid one, else trained on `by_object`'s samples and
+    /// checkpointed; and how many networks were read back.
+    fn train(
+        &self,
+        jobs: &[(u32, Component)],
+        by_object: &[Vec<&Sample>],
+    ) -> Result<(Vec<(Network, NetworkInfo)>, usize), BakeError> {
+        let Trainer { scene, settings, cache, progress, work, corrupt } = *self;
+        let trained = AtomicU64::new(0);
+        let resumed_networks = AtomicUsize::new(0);
+        let settings_key = serde_json::to_string(settings).expect("settings serialise");
+        let networks: Vec<Vec<(Network, NetworkInfo)>> = jobs
+            .par_iter()
+            .map(|&(object, component)| {
+                let mut key = cache_key(scene, &settings_key);
+                key.write(&[component as u8]);
+                key.write(&object.to_le_bytes());
+                let path = cache.join(format!("network-{object:05}-{}.bin", component.name()));
+                let checkpoint: Option<Vec<(Network, NetworkInfo)>> =
+                    cache::read(&path, NETWORK_MAGIC, key.0, corrupt, |bytes| {
+                        let Checkpoint { leaves } = serde_json::from_slice(bytes).ok()?;
+                        leaves
+                            .into_iter()
+                            .map(|Leaf { info, params }| Some((info.network(params, settings.blend_band)?, info)))
+                            .collect()
+                    });
+                let leaves = match checkpoint {
+                    Some(resumed) => {
+                        resumed_networks.fetch_add(resumed.len(), Ordering::SeqCst);
+                        resumed
+                    }
+                    None if matches!(work, Work::Read) => {
+                        return Err(BakeError::MissingStage { path, stage: Stage::Train.name() })
+                    }
+                    None => {
+                        let leaves = train_tree(scene, settings, object, component, &by_object[object as usize]);
+                        let checkpoint = Checkpoint {
+                            leaves: leaves
+                                .iter()
+                                .map(|(n, info)| Leaf { info: info.clone(), params: n.params.clone() })
+                                .collect(),
+                        };
+                        let json = serde_json::to_vec(&checkpoint).expect("checkpoint serialises");
+                        cache::write(&path, NETWORK_MAGIC, key.0, &json)?;
+                        leaves
+                    }
+                };
+                let d = trained.fetch_add(1, Ordering::SeqCst) + 1;
+                progress.trained(d, jobs.len() as u64);
+                Ok(leaves)
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .collect::<Result<_, BakeError>>()?; // the first error in job order, the same on every run
+        Ok((networks.into_iter().flatten().collect(), resumed_networks.into_inner()))
+    }
 }
 
 /// The start of every cache file's key: the model format (it says what the samples' targets

@@ -15,10 +15,10 @@ use gltf::mesh::Mode;
 use super::content_hash::content_hashes;
 use super::error::{element_name, SceneError};
 use super::external;
-use super::sidecar::{Aabb, Sidecar};
+use super::sidecar::{Aabb, LightDomain, Sidecar};
 use super::texture::{ColorSpace, Texture, TextureRef, UvTransform};
 use super::{
-    AlphaMode, Cone, LightKind, Material, MovingLight, Object, Part, PointLight, PointLightUnits, Scene, View,
+    AlphaMode, Cone, LightKind, Material, MaterialRange, MovingLight, Object, PointLight, PointLightUnits, Scene, View,
     CANDELA_PER_WATT, MAX_COORDINATE, MAX_EMISSION,
 };
 
@@ -26,45 +26,21 @@ use super::{
 const SUPPORTED_EXTENSIONS: &[&str] =
     &["KHR_lights_punctual", "KHR_materials_emissive_strength", "KHR_materials_specular", "KHR_texture_transform"];
 
-/// Imports the glTF or GLB `bytes` of `file`; external files resolve against `file`'s folder.
+/// Imports the glTF or GLB `bytes` of `file` with the sidecar at `sidecar_path`, if any;
+/// external files resolve against `file`'s folder.
 pub(super) fn import(
     file: &Path,
     bytes: &[u8],
     sidecar_path: Option<&Path>,
     name: String,
 ) -> Result<Scene, SceneError> {
-    let err = |element: &str, problem: String| SceneError::new(file, element, problem);
-    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
-        .map_err(|e| err("", format!("not a valid glTF or GLB file: {e}")))?;
-    for (i, ext) in document.extensions_required().enumerate() {
-        if !SUPPORTED_EXTENSIONS.contains(&ext) {
-            return Err(err(
-                &format!("extensionsRequired[{i}]"),
-                format!("extension {ext} is required but not supported (rrf supports {SUPPORTED_EXTENSIONS:?})"),
-            ));
-        }
-    }
-    let json = document.into_json();
-    check_before_validation(&json).map_err(|(element, problem)| err(&element, problem))?;
-    let document = gltf::Document::from_json(json).map_err(|e| match e {
-        gltf::Error::Validation(errors) => {
-            let (path, problem) = &errors[0];
-            err(&path.to_string(), format!("{problem} ({} validation errors in all)", errors.len()))
-        }
-        e => err("", e.to_string()),
-    })?;
-
+    let (document, blob) = parse_document(file, bytes)?;
     let base = file.parent().unwrap_or(Path::new("."));
     let buffers = external::load_buffers(file, &document, base, blob)?;
     let images = external::load_images(file, &document, base, &buffers)?;
-
-    let sidecar_text = match sidecar_path {
-        Some(p) => Some(std::fs::read_to_string(p).map_err(|e| SceneError::new(p, "", format!("cannot read: {e}")))?),
-        None => None,
-    };
-    let sidecar = match (sidecar_path, &sidecar_text) {
-        (Some(p), Some(text)) => Sidecar::parse(p, text)?,
-        _ => Sidecar::default(),
+    let sidecar = match sidecar_path {
+        Some(path) => Sidecar::read(path)?,
+        None => Sidecar::default(),
     };
 
     let mut importer = Importer {
@@ -75,216 +51,17 @@ pub(super) fn import(
         textures: Vec::new(),
         texture_ids: HashMap::new(),
     };
-    let mut materials: Vec<Material> =
-        document.materials().map(|m| importer.material(&m, document.as_json())).collect::<Result<_, _>>()?;
-    let default_material = materials.len() as u32;
-    let uses_default = document.meshes().flat_map(|m| m.primitives()).any(|p| p.material().index().is_none());
-    // glTF's default material, for primitives without one: white, fully metallic, fully rough.
-    if uses_default {
-        materials.push(Material {
-            name: "default".into(),
-            base_color: Vec3::ONE,
-            alpha: 1.0,
-            base_color_texture: None,
-            metallic: 1.0,
-            roughness: 1.0,
-            metallic_roughness_texture: None,
-            normal_texture: None,
-            emission: Vec3::ZERO,
-            emissive_texture: None,
-            specular: 1.0,
-            double_sided: false,
-            alpha_mode: AlphaMode::Opaque,
-        });
-    }
-
-    let gltf_scene = document
-        .default_scene()
-        .or_else(|| document.scenes().next())
-        .ok_or_else(|| err("scenes", "the file has no scene".into()))?;
-    let mut objects: Vec<Object> = Vec::new();
-    let mut point_lights: Vec<PointLight> = Vec::new();
-    let mut views: Vec<View> = Vec::new();
-    let mut visited = HashSet::new();
-    let mut skipped_primitives = 0;
-    let mut stack: Vec<(gltf::Node, Mat4)> =
-        gltf_scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect::<Vec<_>>().into_iter().rev().collect();
-    while let Some((node, parent)) = stack.pop() {
-        let element = element_name("nodes", node.index(), node.name());
-        if !visited.insert(node.index()) {
-            return Err(err(&element, "is reachable twice; the node hierarchy must be a tree".into()));
-        }
-        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if !world.is_finite() {
-            return Err(err(&element, "has a non-finite transform".into()));
-        }
-        let node_name = node.name().map(str::to_owned).unwrap_or_else(|| format!("node{}", node.index()));
-
-        if let Some(mesh) = node.mesh() {
-            if let Some(other) = objects.iter().find(|o| o.name == node_name) {
-                return Err(err(
-                    &element,
-                    format!(
-                        "object name {node_name:?} is also used by nodes[{}]; networks are keyed by name",
-                        other.node
-                    ),
-                ));
-            }
-            let id = objects.len() as u32;
-            let object = importer.object(
-                id,
-                node_name.clone(),
-                node.index(),
-                &mesh,
-                world,
-                default_material,
-                &mut skipped_primitives,
-            )?;
-            objects.push(object);
-        }
-        if let Some(light) = node.light() {
-            match light.kind() {
-                gltf::khr_lights_punctual::Kind::Point | gltf::khr_lights_punctual::Kind::Spot { .. } => {
-                    let watts = match sidecar.units.point_lights {
-                        PointLightUnits::Candela => light.intensity() / CANDELA_PER_WATT,
-                        PointLightUnits::WattsPerSteradian => light.intensity(),
-                    };
-                    let intensity = Vec3::from(light.color()) * watts;
-                    if !(intensity.min_element() >= 0.0 && intensity.max_element() <= MAX_EMISSION) {
-                        return Err(err(
-                            &element,
-                            format!(
-                                "point light colour × intensity {intensity} must lie between 0 and {MAX_EMISSION:e}"
-                            ),
-                        ));
-                    }
-                    point_lights.push(PointLight {
-                        name: node_name.clone(),
-                        node: Some(node.index()),
-                        position: world.transform_point3(Vec3::ZERO),
-                        intensity,
-                        cone: spot_cone(&light, &world).map_err(|problem| err(&element, problem))?,
-                    })
-                }
-                gltf::khr_lights_punctual::Kind::Directional => importer.warnings.push(format!(
-                    "{element}: directional light skipped: rrf's networks learn a light that moves inside a box, \
-                     and a directional light has no position (use a distant point light or an emissive quad)"
-                )),
-            }
-        }
-        if let Some(camera) = node.camera() {
-            match camera.projection() {
-                gltf::camera::Projection::Perspective(p) if views.is_empty() => {
-                    views.push(camera_view(&world, p.yfov()).map_err(|problem| err(&element, problem))?);
-                }
-                gltf::camera::Projection::Perspective(_) => {
-                    importer.warnings.push(format!("{element}: only the first camera is used"))
-                }
-                gltf::camera::Projection::Orthographic(_) => {
-                    importer.warnings.push(format!("{element}: orthographic cameras are not supported; skipped"))
-                }
-            }
-        }
-        stack.extend(node.children().map(|c| (c, world)).collect::<Vec<_>>().into_iter().rev());
-    }
-    if objects.iter().all(|o| o.triangles.is_empty()) {
-        return Err(err(
-            "",
-            "has no triangles to render (only meshes of TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN are drawn)".into(),
-        ));
-    }
-    if views.is_empty() {
-        let bounds = objects.iter().flat_map(|o| &o.positions).fold(
-            Aabb { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY },
-            |b, &p| Aabb { min: b.min.min(p), max: b.max.max(p) },
-        );
-        views.push(framing_view(&bounds));
-        importer.warnings.push("the glTF has no camera: the default view looks at the whole scene along -z".into());
-    }
-    if skipped_primitives > 0 {
-        importer
-            .warnings
-            .push(format!("skipped {skipped_primitives} primitives that are not triangles (points or lines)"));
-    }
-
+    let materials = importer.materials(&document)?;
+    // glTF's default material, if a primitive uses it, follows the file's own.
+    let default_material = document.materials().len();
+    let Nodes { objects, mut point_lights, mut views } = importer.nodes(&document, &sidecar, default_material)?;
     let sidecar_file = sidecar_path.unwrap_or(file);
-    for (view_name, spec) in &sidecar.views {
-        if view_name == "default" {
-            return Err(SceneError::new(sidecar_file, "views.default", "the name is taken by the glTF camera"));
-        }
-        views.push(View {
-            name: view_name.clone(),
-            eye: spec.eye.into(),
-            target: spec.target.into(),
-            up: Vec3::Y,
-            fov_y: spec.fov_y,
-        });
-    }
+    views.extend(sidecar_views(&sidecar, sidecar_file)?);
     let moving_light = match &sidecar.light {
         None => None,
         Some(domain) => {
-            let bounds = Aabb { min: domain.min.into(), max: domain.max.into() };
-            if let Some(intensity) = domain.intensity {
-                let taken =
-                    point_lights.iter().any(|l| l.name == domain.node) || objects.iter().any(|o| o.name == domain.node);
-                if taken {
-                    return Err(SceneError::new(
-                        sidecar_file,
-                        "light.intensity",
-                        format!(
-                            "adds a new light, but {:?} names a node of the glTF; remove `intensity` to move that one",
-                            domain.node
-                        ),
-                    ));
-                }
-                point_lights.push(PointLight {
-                    name: domain.node.clone(),
-                    node: None,
-                    position: (bounds.min + bounds.max) * 0.5,
-                    intensity: Vec3::from(intensity),
-                    cone: None,
-                });
-            }
-            let dark =
-                |what: &str| Err(SceneError::new(sidecar_file, "light.node", format!("node {:?} {what}", domain.node)));
-            let (kind, default_position) = if let Some(i) = point_lights.iter().position(|l| l.name == domain.node) {
-                if point_lights[i].intensity.max_element() <= 0.0 {
-                    return dark("emits nothing: its point light has zero intensity");
-                }
-                (LightKind::Point(i), point_lights[i].position)
-            } else if let Some(o) = objects.iter().find(|o| o.name == domain.node) {
-                if !o.parts.iter().any(|p| materials[p.material as usize].is_emissive()) {
-                    return dark("is not a light: it has no emissive material and no point light");
-                }
-                if emitting_area(o, &materials) <= 0.0 {
-                    return dark("is an emitter with no area: its emissive triangles are degenerate");
-                }
-                (LightKind::Area(o.id), o.origin)
-            } else {
-                let lights: Vec<&str> = point_lights
-                    .iter()
-                    .map(|l| l.name.as_str())
-                    .chain(
-                        objects
-                            .iter()
-                            .filter(|o| o.parts.iter().any(|p| materials[p.material as usize].is_emissive()))
-                            .map(|o| o.name.as_str()),
-                    )
-                    .collect();
-                return Err(SceneError::new(
-                    sidecar_file,
-                    "light.node",
-                    format!("no light node named {:?} in {} (lights: {lights:?})", domain.node, file.display()),
-                ));
-            };
-            if !bounds.contains(default_position) {
-                return Err(SceneError::new(
-                    sidecar_file,
-                    "light",
-                    format!("the glTF puts {:?} at {default_position}, outside the box", domain.node),
-                ));
-            }
-            Some(MovingLight { node_name: domain.node.clone(), kind, default_position, bounds })
+            let lights = Lights { file, sidecar_file, objects: &objects, materials: &materials };
+            Some(lights.moving_light(domain, &mut point_lights)?)
         }
     };
 
@@ -307,6 +84,130 @@ pub(super) fn import(
     };
     (scene.content_hash, scene.light_transport_hash) = content_hashes(&scene);
     Ok(scene)
+}
+
+/// The glTF document of `bytes` and its GLB binary chunk, checked: required extensions that
+/// rrf supports, nothing the `gltf` crate would panic on, and the crate's own validation.
+fn parse_document(file: &Path, bytes: &[u8]) -> Result<(gltf::Document, Option<Vec<u8>>), SceneError> {
+    let err = |element: &str, problem: String| SceneError::new(file, element, problem);
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| err("", format!("not a valid glTF or GLB file: {e}")))?;
+    for (i, ext) in document.extensions_required().enumerate() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext) {
+            return Err(err(
+                &format!("extensionsRequired[{i}]"),
+                format!("extension {ext} is required but not supported (rrf supports {SUPPORTED_EXTENSIONS:?})"),
+            ));
+        }
+    }
+    let json = document.into_json();
+    check_before_validation(&json).map_err(|(element, problem)| err(&element, problem))?;
+    let document = gltf::Document::from_json(json).map_err(|e| match e {
+        gltf::Error::Validation(errors) => {
+            let (path, problem) = &errors[0];
+            err(&path.to_string(), format!("{problem} ({} validation errors in all)", errors.len()))
+        }
+        e => err("", e.to_string()),
+    })?;
+    Ok((document, blob))
+}
+
+/// What the walk of a scene's node tree finds.
+struct Nodes {
+    objects: Vec<Object>,
+    point_lights: Vec<PointLight>,
+    /// The default view: the first perspective camera, or one that frames the whole scene.
+    views: Vec<View>,
+}
+
+/// The views the sidecar names.
+fn sidecar_views(sidecar: &Sidecar, sidecar_file: &Path) -> Result<Vec<View>, SceneError> {
+    let mut views = Vec::new();
+    for (view_name, spec) in &sidecar.views {
+        if view_name == "default" {
+            return Err(SceneError::new(sidecar_file, "views.default", "the name is taken by the glTF camera"));
+        }
+        views.push(View {
+            name: view_name.clone(),
+            eye: spec.eye.into(),
+            target: spec.target.into(),
+            up: Vec3::Y,
+            fov_y: spec.fov_y,
+        });
+    }
+    Ok(views)
+}
+
+/// What the sidecar's moving light is checked against.
+struct Lights<'a> {
+    file: &'a Path,
+    sidecar_file: &'a Path,
+    objects: &'a [Object],
+    materials: &'a [Material],
+}
+
+impl Lights<'_> {
+    /// The sidecar's moving light: a point light or an emissive object of the glTF that emits
+    /// and lies inside the box, or a new point light (`intensity`) added to `point_lights`.
+    fn moving_light(
+        &self,
+        domain: &LightDomain,
+        point_lights: &mut Vec<PointLight>,
+    ) -> Result<MovingLight, SceneError> {
+        let error = |element: &str, problem: String| SceneError::new(self.sidecar_file, element, problem);
+        let bounds = Aabb { min: domain.min.into(), max: domain.max.into() };
+        let emissive = |o: &&Object| o.parts.iter().any(|p| self.materials[p.material as usize].is_emissive());
+        if let Some(intensity) = domain.intensity {
+            let taken = point_lights.iter().any(|l| l.name == domain.node)
+                || self.objects.iter().any(|o| o.name == domain.node);
+            if taken {
+                return Err(error(
+                    "light.intensity",
+                    format!(
+                        "adds a new light, but {:?} names a node of the glTF; remove `intensity` to move that one",
+                        domain.node
+                    ),
+                ));
+            }
+            point_lights.push(PointLight {
+                name: domain.node.clone(),
+                node: None,
+                position: (bounds.min + bounds.max) * 0.5,
+                intensity: Vec3::from(intensity),
+                cone: None,
+            });
+        }
+        let dark = |what: &str| Err(error("light.node", format!("node {:?} {what}", domain.node)));
+        let (kind, default_position) = if let Some(i) = point_lights.iter().position(|l| l.name == domain.node) {
+            if point_lights[i].intensity.max_element() <= 0.0 {
+                return dark("emits nothing: its point light has zero intensity");
+            }
+            (LightKind::Point(i), point_lights[i].position)
+        } else if let Some(o) = self.objects.iter().find(|o| o.name == domain.node) {
+            if !emissive(&o) {
+                return dark("is not a light: it has no emissive material and no point light");
+            }
+            if emitting_area(o, self.materials) <= 0.0 {
+                return dark("is an emitter with no area: its emissive triangles are degenerate");
+            }
+            (LightKind::Area(o.id), o.origin)
+        } else {
+            let points = point_lights.iter().map(|l| l.name.as_str());
+            let lights: Vec<&str> =
+                points.chain(self.objects.iter().filter(emissive).map(|o| o.name.as_str())).collect();
+            return Err(error(
+                "light.node",
+                format!("no light node named {:?} in {} (lights: {lights:?})", domain.node, self.file.display()),
+            ));
+        };
+        if !bounds.contains(default_position) {
+            return Err(error(
+                "light",
+                format!("the glTF puts {:?} at {default_position}, outside the box", domain.node),
+            ));
+        }
+        Ok(MovingLight { node_name: domain.node.clone(), kind, default_position, bounds })
+    }
 }
 
 /// What the `gltf` crate (1.4) panics on instead of reporting, found by fuzzing: a POSITION
@@ -401,6 +302,162 @@ struct Importer<'a> {
 }
 
 impl Importer<'_> {
+    /// The file's materials, then glTF's default material if a primitive has none.
+    fn materials(&mut self, document: &gltf::Document) -> Result<Vec<Material>, SceneError> {
+        let mut materials: Vec<Material> =
+            document.materials().map(|m| self.material(&m, document.as_json())).collect::<Result<_, _>>()?;
+        let uses_default = document.meshes().flat_map(|m| m.primitives()).any(|p| p.material().index().is_none());
+        // glTF's default material, for primitives without one: white, fully metallic, fully rough.
+        if uses_default {
+            materials.push(Material {
+                name: "default".into(),
+                base_color: Vec3::ONE,
+                alpha: 1.0,
+                base_color_texture: None,
+                metallic: 1.0,
+                roughness: 1.0,
+                metallic_roughness_texture: None,
+                normal_texture: None,
+                emission: Vec3::ZERO,
+                emissive_texture: None,
+                specular: 1.0,
+                double_sided: false,
+                alpha_mode: AlphaMode::Opaque,
+            });
+        }
+        Ok(materials)
+    }
+
+    /// Walks the default scene's node tree: an object per mesh node (primitives without a
+    /// material get `default_material`), a point light per point or spot light, the first
+    /// perspective camera as the default view.
+    fn nodes(
+        &mut self,
+        document: &gltf::Document,
+        sidecar: &Sidecar,
+        default_material: usize,
+    ) -> Result<Nodes, SceneError> {
+        let err = |element: &str, problem: String| SceneError::new(self.file, element, problem);
+        let gltf_scene = document
+            .default_scene()
+            .or_else(|| document.scenes().next())
+            .ok_or_else(|| err("scenes", "the file has no scene".into()))?;
+        let mut found = Nodes { objects: Vec::new(), point_lights: Vec::new(), views: Vec::new() };
+        let mut visited = HashSet::new();
+        let mut skipped_primitives = 0;
+        let mut stack: Vec<(gltf::Node, Mat4)> =
+            gltf_scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect::<Vec<_>>().into_iter().rev().collect();
+        while let Some((node, parent)) = stack.pop() {
+            let element = element_name("nodes", node.index(), node.name());
+            if !visited.insert(node.index()) {
+                return Err(err(&element, "is reachable twice; the node hierarchy must be a tree".into()));
+            }
+            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            if !world.is_finite() {
+                return Err(err(&element, "has a non-finite transform".into()));
+            }
+            let node_name = node.name().map(str::to_owned).unwrap_or_else(|| format!("node{}", node.index()));
+
+            if let Some(mesh) = node.mesh() {
+                if let Some(other) = found.objects.iter().find(|o| o.name == node_name) {
+                    return Err(err(
+                        &element,
+                        format!(
+                            "object name {node_name:?} is also used by nodes[{}]; networks are keyed by name",
+                            other.node
+                        ),
+                    ));
+                }
+                let id = found.objects.len() as u32;
+                let object = self.object(
+                    id,
+                    node_name.clone(),
+                    node.index(),
+                    &mesh,
+                    world,
+                    default_material as u32,
+                    &mut skipped_primitives,
+                )?;
+                found.objects.push(object);
+            }
+            if let Some(light) = node.light() {
+                let light = self.point_light(&element, &node, &light, world, sidecar.units.point_lights)?;
+                found.point_lights.extend(light);
+            }
+            if let Some(camera) = node.camera() {
+                match camera.projection() {
+                    gltf::camera::Projection::Perspective(p) if found.views.is_empty() => {
+                        found.views.push(camera_view(&world, p.yfov()).map_err(|problem| err(&element, problem))?);
+                    }
+                    gltf::camera::Projection::Perspective(_) => {
+                        self.warnings.push(format!("{element}: only the first camera is used"))
+                    }
+                    gltf::camera::Projection::Orthographic(_) => {
+                        self.warnings.push(format!("{element}: orthographic cameras are not supported; skipped"))
+                    }
+                }
+            }
+            stack.extend(node.children().map(|c| (c, world)).collect::<Vec<_>>().into_iter().rev());
+        }
+        if found.objects.iter().all(|o| o.triangles.is_empty()) {
+            return Err(err(
+                "",
+                "has no triangles to render (only meshes of TRIANGLES, TRIANGLE_STRIP or TRIANGLE_FAN are drawn)"
+                    .into(),
+            ));
+        }
+        if found.views.is_empty() {
+            let bounds = found.objects.iter().flat_map(|o| &o.positions).fold(
+                Aabb { min: Vec3::INFINITY, max: Vec3::NEG_INFINITY },
+                |b, &p| Aabb { min: b.min.min(p), max: b.max.max(p) },
+            );
+            found.views.push(framing_view(&bounds));
+            self.warnings.push("the glTF has no camera: the default view looks at the whole scene along -z".into());
+        }
+        if skipped_primitives > 0 {
+            self.warnings
+                .push(format!("skipped {skipped_primitives} primitives that are not triangles (points or lines)"));
+        }
+        Ok(found)
+    }
+
+    /// The point or spot light of `node` (`element`) at `world`, its intensity read in
+    /// `units`; a directional light is skipped with a warning.
+    fn point_light(
+        &mut self,
+        element: &str,
+        node: &gltf::Node,
+        light: &gltf::khr_lights_punctual::Light,
+        world: Mat4,
+        units: PointLightUnits,
+    ) -> Result<Option<PointLight>, SceneError> {
+        let err = |problem: String| SceneError::new(self.file, element, problem);
+        if let gltf::khr_lights_punctual::Kind::Directional = light.kind() {
+            self.warnings.push(format!(
+                "{element}: directional light skipped: rrf's networks learn a light that moves inside a box, \
+                 and a directional light has no position (use a distant point light or an emissive quad)"
+            ));
+            return Ok(None);
+        }
+        let watts = match units {
+            PointLightUnits::Candela => light.intensity() / CANDELA_PER_WATT,
+            PointLightUnits::WattsPerSteradian => light.intensity(),
+        };
+        let intensity = Vec3::from(light.color()) * watts;
+        if !(intensity.min_element() >= 0.0 && intensity.max_element() <= MAX_EMISSION) {
+            return Err(err(format!(
+                "point light colour × intensity {intensity} must lie between 0 and {MAX_EMISSION:e}"
+            )));
+        }
+        Ok(Some(PointLight {
+            name: node.name().map(str::to_owned).unwrap_or_else(|| format!("node{}", node.index())),
+            node: Some(node.index()),
+            position: world.transform_point3(Vec3::ZERO),
+            intensity,
+            cone: spot_cone(light, &world).map_err(err)?,
+        }))
+    }
+
     /// The material, with every factor checked against the range glTF gives it: values
     /// outside would make negative or non-finite radiance.
     fn material(&mut self, m: &gltf::Material, json: &gltf::json::Root) -> Result<Material, SceneError> {
@@ -532,6 +589,9 @@ impl Importer<'_> {
         id
     }
 
+    /// The object of mesh node `node` at `world`: its triangle primitives in world space, one
+    /// material range each (`default_material` where a primitive has none); other primitives
+    /// are counted in `skipped`.
     #[allow(clippy::too_many_arguments)]
     fn object(
         &mut self,
@@ -543,8 +603,6 @@ impl Importer<'_> {
         default_material: u32,
         skipped: &mut usize,
     ) -> Result<Object, SceneError> {
-        let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-        let flip = world.determinant() < 0.0;
         let mut object = Object {
             id,
             name,
@@ -563,121 +621,98 @@ impl Importer<'_> {
                 *skipped += 1;
                 continue;
             }
-            let position_count = prim.get(&gltf::Semantic::Positions).map(|a| a.count());
-            for (semantic, accessor) in prim.attributes() {
-                let role = match semantic {
-                    gltf::Semantic::Positions => Role::Position,
-                    gltf::Semantic::Normals => Role::Normal,
-                    gltf::Semantic::TexCoords(0) => Role::TexCoord,
-                    gltf::Semantic::Tangents => Role::Tangent,
-                    _ => continue,
-                };
-                self.check_accessor(&accessor, role)?;
-                if position_count.is_some_and(|n| n != accessor.count()) {
-                    return Err(SceneError::new(
-                        self.file,
-                        &element,
-                        format!(
-                            "{} (accessors[{}]) has {} elements but POSITION has {}",
-                            role.name(),
-                            accessor.index(),
-                            accessor.count(),
-                            position_count.unwrap_or(0)
-                        ),
-                    ));
-                }
-            }
-            if let Some(indices) = prim.indices() {
-                self.check_accessor(&indices, Role::Indices)?;
-            }
-            let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
-            let local: Vec<Vec3> = reader
-                .read_positions()
-                .ok_or_else(|| SceneError::new(self.file, &element, "has no POSITION attribute"))?
-                .map(Vec3::from)
-                .collect();
-            if let Some(i) = local.iter().position(|p| !p.is_finite()) {
-                return Err(SceneError::new(self.file, &element, format!("POSITION of vertex {i} is not finite")));
-            }
-            let n = local.len() as u32;
-            let indices: Vec<u32> = match reader.read_indices() {
-                Some(i) => i.into_u32().collect(),
-                None => (0..n).collect(),
-            };
-            if let Some(bad) = indices.iter().find(|&&i| i >= n) {
-                return Err(SceneError::new(
-                    self.file,
-                    &element,
-                    format!(
-                        "index {bad} is out of range for {n} vertices (accessors[{}])",
-                        prim.indices().map_or(0, |a| a.index())
-                    ),
-                ));
-            }
-            let mut triangles = triangle_list(prim.mode(), &indices);
-            if flip {
-                triangles.iter_mut().for_each(|t| t.swap(1, 2));
-            }
-            let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
-            // glTF tangents only go with glTF normals; flat-shaded primitives derive theirs.
-            let tangents: Option<Vec<Vec4>> = reader.read_tangents().filter(|_| normals.is_some()).map(|t| {
-                let to_world = Mat3::from_mat4(world);
-                let handedness = if flip { -1.0 } else { 1.0 };
-                t.map(|[x, y, z, w]| {
-                    (to_world * Vec3::new(x, y, z))
-                        .normalize_or(Vec3::X)
-                        .extend(if w < 0.0 { -1.0 } else { 1.0 } * handedness)
-                })
-                .collect()
-            });
-            let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
-                Some(t) => t.into_f32().map(Vec2::from).collect(),
-                None => vec![Vec2::ZERO; local.len()],
-            };
-            let positions: Vec<Vec3> = local.iter().map(|&p| world.transform_point3(p)).collect();
-            if let Some(i) = positions.iter().position(|p| !p.is_finite() || p.abs().max_element() > MAX_COORDINATE) {
-                return Err(SceneError::new(
-                    self.file,
-                    &element,
-                    format!(
-                        "vertex {i} lies at {} in the world, more than {MAX_COORDINATE:e} m from the origin on an \
-                         axis (check the node's scale and the file's units)",
-                        positions[i]
-                    ),
-                ));
-            }
-
-            let base = object.positions.len() as u32;
+            self.check_primitive(&prim, &element)?;
+            let primitive = self.read_primitive(&prim, &element, world)?;
             let first = object.triangles.len() as u32;
-            let has_tangents = tangents.is_some();
-            match normals {
-                Some(normals) => {
-                    object.positions.extend(&positions);
-                    object.normals.extend(normals.iter().map(|&n| (normal_matrix * n).normalize_or(Vec3::Y)));
-                    object.uvs.extend(&uvs);
-                    object.tangents.extend(tangents.into_iter().flatten());
-                    object.triangles.extend(triangles.iter().map(|t| t.map(|i| base + i)));
-                }
-                // glTF: without normals, flat normals. Each triangle gets its own vertices.
-                None => {
-                    for t in &triangles {
-                        let [a, b, c] = t.map(|i| positions[i as usize]);
-                        let face = (b - a).cross(c - a).normalize_or(Vec3::Y);
-                        let v = object.positions.len() as u32;
-                        object.positions.extend([a, b, c]);
-                        object.normals.extend([face; 3]);
-                        object.uvs.extend(t.map(|i| uvs[i as usize]));
-                        object.triangles.push([v, v + 1, v + 2]);
-                    }
-                }
-            }
-            if !has_tangents {
-                derive_tangents(&mut object, base as usize, first as usize);
-            }
+            append(&mut object, primitive, world);
             let material = prim.material().index().map_or(default_material, |i| i as u32);
-            object.parts.push(Part { material, triangles: first..object.triangles.len() as u32 });
+            object.parts.push(MaterialRange { material, triangles: first..object.triangles.len() as u32 });
         }
         Ok(object)
+    }
+
+    /// Checks the accessors a triangle primitive is read from: their types and bounds, and
+    /// that every vertex attribute has as many elements as POSITION.
+    fn check_primitive(&self, prim: &gltf::Primitive, element: &str) -> Result<(), SceneError> {
+        let position_count = prim.get(&gltf::Semantic::Positions).map(|a| a.count());
+        for (semantic, accessor) in prim.attributes() {
+            let role = match semantic {
+                gltf::Semantic::Positions => Role::Position,
+                gltf::Semantic::Normals => Role::Normal,
+                gltf::Semantic::TexCoords(0) => Role::TexCoord,
+                gltf::Semantic::Tangents => Role::Tangent,
+                _ => continue,
+            };
+            self.check_accessor(&accessor, role)?;
+            if position_count.is_some_and(|n| n != accessor.count()) {
+                return Err(SceneError::new(
+                    self.file,
+                    element,
+                    format!(
+                        "{} (accessors[{}]) has {} elements but POSITION has {}",
+                        role.name(),
+                        accessor.index(),
+                        accessor.count(),
+                        position_count.unwrap_or(0)
+                    ),
+                ));
+            }
+        }
+        if let Some(indices) = prim.indices() {
+            self.check_accessor(&indices, Role::Indices)?;
+        }
+        Ok(())
+    }
+
+    /// A checked triangle primitive's vertices in world space (at `world`) and its triangles,
+    /// wound counter-clockwise.
+    fn read_primitive(&self, prim: &gltf::Primitive, element: &str, world: Mat4) -> Result<Primitive, SceneError> {
+        let error = |problem: String| SceneError::new(self.file, element, problem);
+        let flip = world.determinant() < 0.0;
+        let reader = prim.reader(|b| self.buffers.get(b.index()).map(|d| &d.0[..]));
+        let local: Vec<Vec3> =
+            reader.read_positions().ok_or_else(|| error("has no POSITION attribute".into()))?.map(Vec3::from).collect();
+        if let Some(i) = local.iter().position(|p| !p.is_finite()) {
+            return Err(error(format!("POSITION of vertex {i} is not finite")));
+        }
+        let n = local.len() as u32;
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..n).collect(),
+        };
+        if let Some(bad) = indices.iter().find(|&&i| i >= n) {
+            let accessor = prim.indices().map_or(0, |a| a.index());
+            return Err(error(format!("index {bad} is out of range for {n} vertices (accessors[{accessor}])")));
+        }
+        let mut triangles = triangle_list(prim.mode(), &indices);
+        if flip {
+            triangles.iter_mut().for_each(|t| t.swap(1, 2));
+        }
+        let normals: Option<Vec<Vec3>> = reader.read_normals().map(|n| n.map(Vec3::from).collect());
+        // glTF tangents only go with glTF normals; flat-shaded primitives derive theirs.
+        let tangents: Option<Vec<Vec4>> = reader.read_tangents().filter(|_| normals.is_some()).map(|t| {
+            let to_world = Mat3::from_mat4(world);
+            let handedness = if flip { -1.0 } else { 1.0 };
+            t.map(|[x, y, z, w]| {
+                (to_world * Vec3::new(x, y, z))
+                    .normalize_or(Vec3::X)
+                    .extend(if w < 0.0 { -1.0 } else { 1.0 } * handedness)
+            })
+            .collect()
+        });
+        let uvs: Vec<Vec2> = match reader.read_tex_coords(0) {
+            Some(t) => t.into_f32().map(Vec2::from).collect(),
+            None => vec![Vec2::ZERO; local.len()],
+        };
+        let positions: Vec<Vec3> = local.iter().map(|&p| world.transform_point3(p)).collect();
+        if let Some(i) = positions.iter().position(|p| !p.is_finite() || p.abs().max_element() > MAX_COORDINATE) {
+            return Err(error(format!(
+                "vertex {i} lies at {} in the world, more than {MAX_COORDINATE:e} m from the origin on an axis \
+                 (check the node's scale and the file's units)",
+                positions[i]
+            )));
+        }
+        Ok(Primitive { positions, normals, tangents, uvs, triangles })
     }
 
     /// Checks that an accessor has a type glTF allows for its role, that its elements lie
@@ -741,6 +776,49 @@ impl Importer<'_> {
             }
         }
         Ok(())
+    }
+}
+
+/// One triangle primitive, read and placed in the world (normals in the mesh's frame).
+struct Primitive {
+    positions: Vec<Vec3>,
+    normals: Option<Vec<Vec3>>,
+    tangents: Option<Vec<Vec4>>,
+    uvs: Vec<Vec2>,
+    triangles: Vec<[u32; 3]>,
+}
+
+/// Adds `primitive` (of a node at `world`) to `object`: its normals to world space, or flat
+/// normals where it has none (glTF's rule), and tangents derived where it has none.
+fn append(object: &mut Object, primitive: Primitive, world: Mat4) {
+    let Primitive { positions, normals, tangents, uvs, triangles } = primitive;
+    let base = object.positions.len() as u32;
+    let first = object.triangles.len();
+    let has_tangents = tangents.is_some();
+    match normals {
+        Some(normals) => {
+            let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+            object.positions.extend(&positions);
+            object.normals.extend(normals.iter().map(|&n| (normal_matrix * n).normalize_or(Vec3::Y)));
+            object.uvs.extend(&uvs);
+            object.tangents.extend(tangents.into_iter().flatten());
+            object.triangles.extend(triangles.iter().map(|t| t.map(|i| base + i)));
+        }
+        // Each triangle gets its own vertices.
+        None => {
+            for t in &triangles {
+                let [a, b, c] = t.map(|i| positions[i as usize]);
+                let face = (b - a).cross(c - a).normalize_or(Vec3::Y);
+                let v = object.positions.len() as u32;
+                object.positions.extend([a, b, c]);
+                object.normals.extend([face; 3]);
+                object.uvs.extend(t.map(|i| uvs[i as usize]));
+                object.triangles.push([v, v + 1, v + 2]);
+            }
+        }
+    }
+    if !has_tangents {
+        derive_tangents(object, base as usize, first);
     }
 }
 

@@ -91,7 +91,7 @@ pub struct Object {
     /// Counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
     /// Runs of triangles that share a material, one per glTF primitive.
-    pub parts: Vec<Part>,
+    pub parts: Vec<MaterialRange>,
 }
 
 impl Object {
@@ -114,8 +114,9 @@ impl Object {
     }
 }
 
+/// A run of an object's triangles that share a material (a glTF primitive).
 #[derive(Clone, Debug)]
-pub struct Part {
+pub struct MaterialRange {
     pub material: u32,
     pub triangles: Range<u32>,
 }

@@ -187,6 +187,12 @@ impl Aabb {
 }
 
 impl Sidecar {
+    /// Reads and parses the sidecar at `file`.
+    pub fn read(file: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(file).map_err(|e| SceneError::new(file, "", format!("cannot read: {e}")))?;
+        Sidecar::parse(file, &text)
+    }
+
     pub fn parse(file: &Path, text: &str) -> Result<Self, SceneError> {
         let sidecar: Sidecar = toml::from_str(text).map_err(|e| {
             let element = match e.span() {

@@ -111,21 +111,26 @@ impl ComputePass {
         dispatch: Dispatch,
     ) {
         let device = &ctx.device;
-        // SAFETY: `cmd` is recording; the pipeline, layout and set belong to this device.
-        unsafe {
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipelines[index]);
-            if let Some(set) = self.set.as_ref().filter(|s| s.set != vk::DescriptorSet::null()) {
-                device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &[set.set], &[]);
+        // SAFETY: `cmd` is recording, outside a render pass; the pipeline, layout, set and
+        // buffers belong to this device and outlive the frame (true of the blocks below too).
+        unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipelines[index]) };
+        if let Some(set) = self.set.as_ref().filter(|s| s.set != vk::DescriptorSet::null()) {
+            let sets = [set.set];
+            // SAFETY: as above; the set matches the layout's set 0.
+            unsafe { device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::COMPUTE, self.layout, 0, &sets, &[]) };
+        }
+        if !push.is_empty() {
+            // SAFETY: as above; the layout's push range is the size the pass was made with.
+            unsafe { device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push) };
+        }
+        match dispatch {
+            Dispatch::Covering { width, height } => {
+                let groups = (width.div_ceil(self.workgroup.0), height.div_ceil(self.workgroup.1));
+                // SAFETY: as above.
+                unsafe { device.cmd_dispatch(cmd, groups.0, groups.1, 1) };
             }
-            if !push.is_empty() {
-                device.cmd_push_constants(cmd, self.layout, vk::ShaderStageFlags::COMPUTE, 0, push);
-            }
-            match dispatch {
-                Dispatch::Covering { width, height } => {
-                    device.cmd_dispatch(cmd, width.div_ceil(self.workgroup.0), height.div_ceil(self.workgroup.1), 1);
-                }
-                Dispatch::Indirect { buffer, offset } => device.cmd_dispatch_indirect(cmd, buffer.raw, offset),
-            }
+            // SAFETY: as above; the buffer was made with indirect usage and holds the arguments.
+            Dispatch::Indirect { buffer, offset } => unsafe { device.cmd_dispatch_indirect(cmd, buffer.raw, offset) },
         }
     }
 

@@ -66,31 +66,23 @@ impl BoundSet {
             pool: vk::DescriptorPool::null(),
             set: vk::DescriptorSet::null(),
         });
-        // SAFETY: the create infos are valid and outlive their calls; the objects are
-        // destroyed by `destroy`.
-        unsafe {
-            bound.layout = device
-                .create_descriptor_set_layout(
-                    &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
-                    None,
-                )
-                .vk("vkCreateDescriptorSetLayout")?;
-            if !sizes.is_empty() {
-                bound.pool = device
-                    .create_descriptor_pool(
-                        &vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes),
-                        None,
-                    )
-                    .vk("vkCreateDescriptorPool")?;
-                let set_layouts = [bound.layout];
-                bound.set = device
-                    .allocate_descriptor_sets(
-                        &vk::DescriptorSetAllocateInfo::default().descriptor_pool(bound.pool).set_layouts(&set_layouts),
-                    )
-                    .vk("vkAllocateDescriptorSets")?[0];
-            }
-            write_set(device, bound.set, bindings);
+        // Each object made below is destroyed by `destroy`, through the guard if a later
+        // step fails.
+        let layout_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings);
+        // SAFETY: a valid create info that outlives the call.
+        bound.layout =
+            unsafe { device.create_descriptor_set_layout(&layout_info, None) }.vk("vkCreateDescriptorSetLayout")?;
+        if !sizes.is_empty() {
+            let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes);
+            // SAFETY: a valid create info that outlives the call.
+            bound.pool = unsafe { device.create_descriptor_pool(&pool_info, None) }.vk("vkCreateDescriptorPool")?;
+            let set_layouts = [bound.layout];
+            let alloc = vk::DescriptorSetAllocateInfo::default().descriptor_pool(bound.pool).set_layouts(&set_layouts);
+            // SAFETY: the pool and the layout were made above; the pool has room for the set.
+            bound.set = unsafe { device.allocate_descriptor_sets(&alloc) }.vk("vkAllocateDescriptorSets")?[0];
         }
+        // SAFETY: the set was just allocated from this device; the resources belong to it too.
+        unsafe { write_set(device, bound.set, bindings) };
         ctx.set_name(bound.layout, name);
         Ok(bound.keep())
     }

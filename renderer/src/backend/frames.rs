@@ -5,6 +5,7 @@
 use ash::vk;
 
 use crate::backend::context::Context;
+use crate::backend::guard::Destroy;
 use crate::error::{Result, VkContext};
 
 /// Frames the CPU may record ahead of the GPU.
@@ -75,36 +76,32 @@ impl FrameLoop {
             .command_pool(self.pool)
             .level(vk::CommandBufferLevel::PRIMARY)
             .command_buffer_count(1);
-        // SAFETY: valid create infos; what is made is destroyed in `destroy`, or here if a
-        // later step fails.
-        unsafe {
-            let cmd = device.allocate_command_buffers(&alloc).vk("vkAllocateCommandBuffers")?[0];
-            // Signalled, so that the first wait on a fresh slot returns at once.
-            let fence = device
-                .create_fence(&vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED), None)
-                .vk("vkCreateFence")?;
-            let semaphore = match device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) {
-                Ok(s) => s,
-                Err(e) => {
-                    device.destroy_fence(fence, None);
-                    return Err(e).vk("vkCreateSemaphore");
-                }
-            };
-            let query_info =
-                vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(self.timestamps);
-            let queries = match device.create_query_pool(&query_info, None) {
-                Ok(q) => q,
-                Err(e) => {
-                    device.destroy_fence(fence, None);
-                    device.destroy_semaphore(semaphore, None);
-                    return Err(e).vk("vkCreateQueryPool");
-                }
-            };
-            ctx.set_name(cmd, &format!("frame {index} commands"));
-            ctx.set_name(fence, &format!("frame {index} done"));
-            ctx.set_name(semaphore, &format!("frame {index} image available"));
-            Ok(FrameSlot { cmd, fence, image_available: semaphore, queries, stamped: false, deferred: Vec::new() })
-        }
+        // SAFETY: a valid allocate info for this ring's pool, which frees the buffer with it.
+        let cmd = unsafe { device.allocate_command_buffers(&alloc) }.vk("vkAllocateCommandBuffers")?[0];
+        // Destroyed by the guard if a later step fails; null handles are skipped.
+        let mut slot = ctx.guard(FrameSlot {
+            cmd,
+            fence: vk::Fence::null(),
+            image_available: vk::Semaphore::null(),
+            queries: vk::QueryPool::null(),
+            stamped: false,
+            deferred: Vec::new(),
+        });
+        // Signalled, so that the first wait on a fresh slot returns at once.
+        let signalled = vk::FenceCreateInfo::default().flags(vk::FenceCreateFlags::SIGNALED);
+        // SAFETY: a valid create info that outlives the call (true of the two below too).
+        slot.fence = unsafe { device.create_fence(&signalled, None) }.vk("vkCreateFence")?;
+        // SAFETY: as above.
+        slot.image_available =
+            unsafe { device.create_semaphore(&vk::SemaphoreCreateInfo::default(), None) }.vk("vkCreateSemaphore")?;
+        let query_info =
+            vk::QueryPoolCreateInfo::default().query_type(vk::QueryType::TIMESTAMP).query_count(self.timestamps);
+        // SAFETY: as above.
+        slot.queries = unsafe { device.create_query_pool(&query_info, None) }.vk("vkCreateQueryPool")?;
+        ctx.set_name(cmd, &format!("frame {index} commands"));
+        ctx.set_name(slot.fence, &format!("frame {index} done"));
+        ctx.set_name(slot.image_available, &format!("frame {index} image available"));
+        Ok(slot.keep())
     }
 
     /// Waits until the next slot's previous frame has finished, runs its deferred work, and
@@ -116,29 +113,32 @@ impl FrameLoop {
         let timestamps = self.timestamps;
         let slot = &mut self.slots[self.current];
         let device = &ctx.device;
-        // SAFETY: the fence, command buffer and query pool belong to this slot; once the fence
-        // is signalled, nothing of the slot's previous frame is pending.
-        unsafe {
-            device.wait_for_fences(&[slot.fence], true, u64::MAX).vk("vkWaitForFences")?;
-            for work in slot.deferred.drain(..) {
-                work(ctx);
-            }
-            let stamps = if slot.stamped {
-                let mut values = vec![0u64; timestamps as usize];
-                device
-                    .get_query_pool_results(slot.queries, 0, &mut values, vk::QueryResultFlags::TYPE_64)
-                    .vk("vkGetQueryPoolResults")?;
-                slot.stamped = false;
-                Some(values)
-            } else {
-                None
-            };
-            device.reset_command_buffer(slot.cmd, vk::CommandBufferResetFlags::empty()).vk("vkResetCommandBuffer")?;
-            let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
-            device.begin_command_buffer(slot.cmd, &begin).vk("vkBeginCommandBuffer")?;
-            device.cmd_reset_query_pool(slot.cmd, slot.queries, 0, timestamps);
-            Ok(stamps)
+        // SAFETY: the fence belongs to this slot.
+        unsafe { device.wait_for_fences(&[slot.fence], true, u64::MAX) }.vk("vkWaitForFences")?;
+        // Nothing of the slot's previous frame is pending any more.
+        for work in slot.deferred.drain(..) {
+            work(ctx);
         }
+        let stamps = if slot.stamped {
+            let mut values = vec![0u64; timestamps as usize];
+            let flags = vk::QueryResultFlags::TYPE_64;
+            // SAFETY: the slot's previous frame, now finished, wrote all `timestamps` queries.
+            unsafe { device.get_query_pool_results(slot.queries, 0, &mut values, flags) }
+                .vk("vkGetQueryPoolResults")?;
+            slot.stamped = false;
+            Some(values)
+        } else {
+            None
+        };
+        let flags = vk::CommandBufferResetFlags::empty();
+        // SAFETY: the command buffer's last submission has finished (the fence above).
+        unsafe { device.reset_command_buffer(slot.cmd, flags) }.vk("vkResetCommandBuffer")?;
+        let begin = vk::CommandBufferBeginInfo::default().flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT);
+        // SAFETY: the command buffer was just reset.
+        unsafe { device.begin_command_buffer(slot.cmd, &begin) }.vk("vkBeginCommandBuffer")?;
+        // SAFETY: recording, outside a render pass; the pool holds `timestamps` queries.
+        unsafe { device.cmd_reset_query_pool(slot.cmd, slot.queries, 0, timestamps) };
+        Ok(stamps)
     }
 
     /// The handles of the frame [`FrameLoop::begin`] began last.
@@ -202,14 +202,23 @@ impl FrameLoop {
     /// Waits for all frames, runs the deferred work and destroys the ring.
     pub fn destroy(mut self, ctx: &Context) {
         let _ = self.wait_all(ctx);
-        // SAFETY: no frame of the ring is pending any more.
+        for slot in self.slots.drain(..) {
+            slot.destroy(ctx);
+        }
+        // SAFETY: no frame of the ring is pending any more; the pool frees its buffers.
+        unsafe { ctx.device.destroy_command_pool(self.pool, None) };
+    }
+}
+
+impl Destroy for FrameSlot {
+    /// Destroys the slot's objects (its command buffer goes with the pool); null handles are
+    /// skipped. No frame of the slot may be pending.
+    fn destroy(self, ctx: &Context) {
+        // SAFETY: as the caller guarantees, nothing uses the slot's objects.
         unsafe {
-            for slot in self.slots.drain(..) {
-                ctx.device.destroy_fence(slot.fence, None);
-                ctx.device.destroy_semaphore(slot.image_available, None);
-                ctx.device.destroy_query_pool(slot.queries, None);
-            }
-            ctx.device.destroy_command_pool(self.pool, None);
+            ctx.device.destroy_fence(self.fence, None);
+            ctx.device.destroy_semaphore(self.image_available, None);
+            ctx.device.destroy_query_pool(self.queries, None);
         }
     }
 }

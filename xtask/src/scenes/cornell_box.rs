@@ -77,7 +77,7 @@ max = [0.50, 0.50, 0.05]
 # 8,000 rays per configuration (twice the preset) find 306,000, enough for the floor behind the
 # blocks and the blocks' shadow edges, trained to depth 3 with up to 100 iterations; 1,024 paths
 # per sample (4x the preset) keep the targets' noise low. Held-out gi FLIP 0.053 -> 0.041 against
-# 2048-spp references, and a final bake of about 8 minutes here (BENCHMARKS.md, "More samples, a deeper tree" and "Baking").
+# 2048-spp references, and a final bake of about 8 minutes here (docs/experiments/deeper-tree-lambert.md and BENCHMARKS.md, "Baking").
 [bake.final]
 paths_per_sample = 1024
 rays_per_configuration = 8000

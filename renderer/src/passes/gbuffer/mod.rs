@@ -164,46 +164,34 @@ impl GBufferPass {
         let bindings = [Bind::StorageBuffer(&mesh.materials), Bind::StorageBuffer(&mesh.texels)];
         let set = pass.set.insert(BoundSet::new(ctx, "gbuffer", &bindings, vk::ShaderStageFlags::FRAGMENT)?);
         let set_layouts = [set.layout];
-        // SAFETY: valid create infos that outlive the calls; objects destroyed in `destroy`.
-        unsafe {
-            pass.layout = device
-                .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push),
-                    None,
-                )
-                .vk("vkCreatePipelineLayout")?;
-            let layout = pass.layout;
-            let attributes = [
-                vk::VertexInputAttributeDescription::default()
-                    .location(0)
-                    .format(vk::Format::R32G32B32_SFLOAT)
-                    .offset(0),
-                vk::VertexInputAttributeDescription::default()
-                    .location(1)
-                    .format(vk::Format::R32G32B32_SFLOAT)
-                    .offset(12),
-                vk::VertexInputAttributeDescription::default().location(2).format(vk::Format::R32_UINT).offset(48),
-                vk::VertexInputAttributeDescription::default().location(3).format(vk::Format::R32_UINT).offset(52),
-                vk::VertexInputAttributeDescription::default().location(4).format(vk::Format::R32G32_SFLOAT).offset(24),
-                vk::VertexInputAttributeDescription::default()
-                    .location(5)
-                    .format(vk::Format::R32G32B32A32_SFLOAT)
-                    .offset(32),
-            ];
-            let raster = Raster {
-                vertex,
-                fragment,
-                attributes: &attributes,
-                color_formats: &[SURFACE_FORMAT, ID_FORMAT, SHADING_FORMAT],
-                depth_format: DEPTH_FORMAT,
-            };
-            // Specialization constant 0 (TEXTURED) off, then on.
-            let pipelines = raster.pipelines(ctx, layout, &[0, 1])?;
-            pass.pipelines.copy_from_slice(&pipelines);
-            ctx.set_name(pass.pipelines[0], "gbuffer");
-            ctx.set_name(pass.pipelines[1], "gbuffer (textured)");
-            ctx.set_name(layout, "gbuffer");
-        }
+        let layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts).push_constant_ranges(&push);
+        // SAFETY: a valid create info that outlives the call; the layout is destroyed in `destroy`.
+        pass.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
+        let layout = pass.layout;
+        let attributes = [
+            vk::VertexInputAttributeDescription::default().location(0).format(vk::Format::R32G32B32_SFLOAT).offset(0),
+            vk::VertexInputAttributeDescription::default().location(1).format(vk::Format::R32G32B32_SFLOAT).offset(12),
+            vk::VertexInputAttributeDescription::default().location(2).format(vk::Format::R32_UINT).offset(48),
+            vk::VertexInputAttributeDescription::default().location(3).format(vk::Format::R32_UINT).offset(52),
+            vk::VertexInputAttributeDescription::default().location(4).format(vk::Format::R32G32_SFLOAT).offset(24),
+            vk::VertexInputAttributeDescription::default()
+                .location(5)
+                .format(vk::Format::R32G32B32A32_SFLOAT)
+                .offset(32),
+        ];
+        let raster = Raster {
+            vertex,
+            fragment,
+            attributes: &attributes,
+            color_formats: &[SURFACE_FORMAT, ID_FORMAT, SHADING_FORMAT],
+            depth_format: DEPTH_FORMAT,
+        };
+        // Specialization constant 0 (TEXTURED) off, then on.
+        let pipelines = raster.pipelines(ctx, layout, &[0, 1])?;
+        pass.pipelines.copy_from_slice(&pipelines);
+        ctx.set_name(pass.pipelines[0], "gbuffer");
+        ctx.set_name(pass.pipelines[1], "gbuffer (textured)");
+        ctx.set_name(layout, "gbuffer");
         Ok(pass.keep())
     }
 
@@ -266,44 +254,54 @@ impl GBufferPass {
             min_depth: 0.0,
             max_depth: 1.0,
         };
-        // SAFETY: `cmd` is recording outside a render pass; all objects belong to this device.
+        // SAFETY: `cmd` is recording, outside a render pass until this call; every object
+        // belongs to this device and outlives the frame (true of the blocks below too).
+        unsafe { device.cmd_begin_rendering(cmd, &info) };
+        // SAFETY: as above; the pipelines set the viewport and scissor dynamically.
         unsafe {
-            device.cmd_begin_rendering(cmd, &info);
-
             device.cmd_set_viewport(cmd, 0, &[viewport]);
             device.cmd_set_scissor(cmd, 0, &[area]);
-            if let Some(set) = &self.set {
-                device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &[set.set], &[]);
-            }
-            mesh.bind(ctx, cmd);
-            // The scene, then each copy of the moving light with its own offset and scale.
-            let still = std::iter::once((*camera, false));
-            let copies = lights.iter().map(|l| {
-                let placed = GBufferConstants {
-                    light_offset: [l.offset[0], l.offset[1], l.offset[2], 0.0],
-                    light_scale: [l.scale[0], l.scale[1], l.scale[2], 0.0],
-                    ..*camera
-                };
-                (placed, true)
-            });
-            let mut bound = None;
-            for (constants, moving) in still.chain(copies) {
-                let stage = vk::ShaderStageFlags::VERTEX;
-                device.cmd_push_constants(cmd, self.layout, stage, 0, bytemuck::bytes_of(&constants));
-                // Objects whose bounds are outside the view cost no vertex work or triangle
-                // set-up.
-                let draws = mesh.draws.iter().filter(|d| (d.object + 1 == constants.light_object) == moving);
-                for draw in draws.filter(|d| d.visible(&constants)) {
-                    if bound != Some(draw.textured) {
-                        let pipeline = self.pipelines[usize::from(draw.textured)];
-                        device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
-                        bound = Some(draw.textured);
-                    }
-                    device.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0);
-                }
-            }
-            device.cmd_end_rendering(cmd);
         }
+        if let Some(set) = &self.set {
+            let sets = [set.set];
+            // SAFETY: as above; the set matches the layout's set 0.
+            unsafe {
+                device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &sets, &[])
+            };
+        }
+        mesh.bind(ctx, cmd);
+        // The scene, then each copy of the moving light with its own offset and scale.
+        let still = std::iter::once((*camera, false));
+        let copies = lights.iter().map(|l| {
+            let placed = GBufferConstants {
+                light_offset: [l.offset[0], l.offset[1], l.offset[2], 0.0],
+                light_scale: [l.scale[0], l.scale[1], l.scale[2], 0.0],
+                ..*camera
+            };
+            (placed, true)
+        });
+        let mut bound = None;
+        for (constants, moving) in still.chain(copies) {
+            let stage = vk::ShaderStageFlags::VERTEX;
+            // SAFETY: `cmd` is recording; the layout has a vertex range of this size.
+            unsafe { device.cmd_push_constants(cmd, self.layout, stage, 0, bytemuck::bytes_of(&constants)) };
+            // Objects whose bounds are outside the view cost no vertex work or triangle
+            // set-up.
+            let draws = mesh.draws.iter().filter(|d| (d.object + 1 == constants.light_object) == moving);
+            for draw in draws.filter(|d| d.visible(&constants)) {
+                if bound != Some(draw.textured) {
+                    let pipeline = self.pipelines[usize::from(draw.textured)];
+                    // SAFETY: `cmd` is recording inside this pass's rendering.
+                    unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline) };
+                    bound = Some(draw.textured);
+                }
+                // SAFETY: a pipeline, the mesh's buffers and the constants are bound; the draw is
+                // one of the mesh's own index runs, whose indices `GBufferMesh::new` checked.
+                unsafe { device.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0) };
+            }
+        }
+        // SAFETY: as above; ends the rendering begun here.
+        unsafe { device.cmd_end_rendering(cmd) };
     }
 
     pub fn destroy(self, ctx: &Context) {
