@@ -133,20 +133,9 @@ impl Context {
         let raw = unsafe { self.device.create_buffer(&info, None) }.vk("vkCreateBuffer")?;
         // SAFETY: a query on the buffer just made.
         let requirements = unsafe { self.device.get_buffer_memory_requirements(raw) };
-        let allocation = self
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location,
-                linear: true,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| {
-                // SAFETY: the buffer has no memory and no user yet.
-                unsafe { self.device.destroy_buffer(raw, None) };
-                Error::Allocation { name: name.to_string(), bytes: requirements.size, source }
-            })?;
+        // SAFETY: the buffer has no memory and no user yet.
+        let allocation =
+            self.allocate(name, requirements, location, true, || unsafe { self.device.destroy_buffer(raw, None) })?;
         let buffer = Buffer { raw, size, allocation };
         if let Err(e) =
             // SAFETY: the allocation was made for this buffer's requirements.
@@ -173,6 +162,29 @@ impl Context {
     pub(crate) fn destroy_shader_module(&self, module: vk::ShaderModule) {
         // SAFETY: pipelines made from a module do not need it afterwards; null is ignored.
         unsafe { self.device.destroy_shader_module(module, None) };
+    }
+
+    /// Memory for an object with `requirements` (`linear`: a buffer, not an optimally tiled
+    /// image). If there is none, `release` destroys the object before the error returns.
+    fn allocate(
+        &self,
+        name: &str,
+        requirements: vk::MemoryRequirements,
+        location: MemoryLocation,
+        linear: bool,
+        release: impl FnOnce(),
+    ) -> Result<Allocation> {
+        let desc = AllocationCreateDesc {
+            name,
+            requirements,
+            location,
+            linear,
+            allocation_scheme: AllocationScheme::GpuAllocatorManaged,
+        };
+        self.allocator().allocate(&desc).map_err(|source| {
+            release();
+            Error::Allocation { name: name.to_string(), bytes: requirements.size, source }
+        })
     }
 
     pub fn destroy_buffer(&self, buffer: Buffer) {
@@ -247,20 +259,10 @@ impl Context {
         let raw = unsafe { self.device.create_image(&info, None) }.vk("vkCreateImage")?;
         // SAFETY: a query on the image just made.
         let requirements = unsafe { self.device.get_image_memory_requirements(raw) };
-        let allocation = self
-            .allocator()
-            .allocate(&AllocationCreateDesc {
-                name,
-                requirements,
-                location: MemoryLocation::GpuOnly,
-                linear: false,
-                allocation_scheme: AllocationScheme::GpuAllocatorManaged,
-            })
-            .map_err(|source| {
-                // SAFETY: the image has no memory and no user yet.
-                unsafe { self.device.destroy_image(raw, None) };
-                Error::Allocation { name: name.to_string(), bytes: requirements.size, source }
-            })?;
+        // SAFETY: the image has no memory and no user yet.
+        let allocation = self.allocate(name, requirements, MemoryLocation::GpuOnly, false, || unsafe {
+            self.device.destroy_image(raw, None)
+        })?;
         // Destroyed on every early return below; the view is null until it is made.
         let mut image = self.guard(Image { raw, view: vk::ImageView::null(), format, extent, allocation });
         // SAFETY: the allocation was made for this image's requirements.

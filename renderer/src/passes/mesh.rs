@@ -194,6 +194,14 @@ impl GBufferMesh {
         }
     }
 
+    /// Records `draw`, one of this mesh's index runs, into `cmd`, inside a rendering with a
+    /// pipeline, this mesh's buffers ([`GBufferMesh::bind`]) and the constants bound.
+    pub(crate) fn draw(&self, ctx: &Context, cmd: vk::CommandBuffer, draw: &Draw) {
+        // SAFETY: as the caller guarantees, `cmd` is ready to draw; the run's indices lie
+        // inside the index buffer, and `new` checked each against the vertex count.
+        unsafe { ctx.device.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0) };
+    }
+
     pub fn destroy(self, ctx: &Context) {
         for buffer in [self.buffer, self.materials, self.texels] {
             ctx.destroy_buffer(buffer);

@@ -21,6 +21,51 @@ pub(crate) fn cleared_depth(depth: &Image) -> vk::RenderingAttachmentInfo<'stati
         .clear_value(vk::ClearValue { depth_stencil: vk::ClearDepthStencilValue { depth: 1.0, stencil: 0 } })
 }
 
+/// Records a dynamic rendering of `info` into `cmd` (recording, outside a render pass):
+/// `draw` records what is drawn inside it, with the viewport and scissor set to the render
+/// area and `pipeline` bound with `layout`'s set 0 (`set`, if any).
+pub(crate) fn render(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    info: &vk::RenderingInfo,
+    (pipeline, layout, set): (vk::Pipeline, vk::PipelineLayout, Option<vk::DescriptorSet>),
+    draw: impl FnOnce(),
+) {
+    let device = &ctx.device;
+    let area = info.render_area;
+    // SAFETY: `cmd` is recording outside a render pass (the caller's contract); the
+    // attachments, the pipeline and the set belong to this device and outlive the frame.
+    unsafe { device.cmd_begin_rendering(cmd, info) };
+    set_viewport(ctx, cmd, area);
+    // SAFETY: as above.
+    unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline) };
+    if let Some(set) = set {
+        // SAFETY: as above; the set matches the layout's set 0.
+        unsafe { device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, layout, 0, &[set], &[]) };
+    }
+    draw();
+    // SAFETY: ends the rendering begun above.
+    unsafe { device.cmd_end_rendering(cmd) };
+}
+
+/// Sets the viewport (depth 0 to 1) and the scissor to `rect`: every pipeline of [`Raster`]
+/// takes them dynamically. Inside [`render`] only.
+pub(crate) fn set_viewport(ctx: &Context, cmd: vk::CommandBuffer, rect: vk::Rect2D) {
+    let viewport = vk::Viewport {
+        x: rect.offset.x as f32,
+        y: rect.offset.y as f32,
+        width: rect.extent.width as f32,
+        height: rect.extent.height as f32,
+        min_depth: 0.0,
+        max_depth: 1.0,
+    };
+    // SAFETY: `cmd` is recording inside a rendering whose pipeline sets these dynamically.
+    unsafe {
+        ctx.device.cmd_set_viewport(cmd, 0, &[viewport]);
+        ctx.device.cmd_set_scissor(cmd, 0, &[rect]);
+    }
+}
+
 /// A graphics pipeline that rasterises the scene mesh ([`GBufferVertex`]) with depth testing,
 /// for the G-buffer and shadow passes.
 pub(crate) struct Raster<'a> {

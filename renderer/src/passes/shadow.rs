@@ -15,7 +15,7 @@ use crate::backend::sync::{Access, Pass, ResourceStates, Use};
 use crate::error::{Result, VkContext};
 use crate::lights::MAX_LIGHTS;
 use crate::passes::mesh::GBufferMesh;
-use crate::passes::raster::{cleared_depth, Raster, DEPTH_FORMAT};
+use crate::passes::raster::{self, cleared_depth, Raster, DEPTH_FORMAT};
 
 /// Texels per side of a cube face (`SHADOW_SIZE` in `shadow_cube.glsl`).
 pub const SHADOW_SIZE: u32 = 256;
@@ -130,48 +130,23 @@ impl ShadowPass {
             .layer_count(1)
             .color_attachments(&color)
             .depth_attachment(&depth);
-        // SAFETY: `cmd` is recording outside a render pass; the attachments and the pipeline
-        // belong to this device and outlive the frame.
-        unsafe {
-            device.cmd_begin_rendering(cmd, &info);
-            device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline);
-        }
-        mesh.bind(ctx, cmd);
-        for (row, light) in lights.iter().take(rows as usize).enumerate() {
-            for face in 0..6u32 {
-                let (x, y) = (face * SHADOW_SIZE, row as u32 * SHADOW_SIZE);
-                let size = SHADOW_SIZE as f32;
-                let viewport = vk::Viewport {
-                    x: x as f32,
-                    y: y as f32,
-                    width: size,
-                    height: size,
-                    min_depth: 0.0,
-                    max_depth: 1.0,
-                };
-                let scissor = vk::Rect2D {
-                    offset: vk::Offset2D { x: x as i32, y: y as i32 },
-                    extent: vk::Extent2D { width: SHADOW_SIZE, height: SHADOW_SIZE },
-                };
-                // SAFETY: `cmd` is recording inside this pass's rendering; the pipeline sets the
-                // viewport and scissor dynamically.
-                unsafe {
-                    device.cmd_set_viewport(cmd, 0, &[viewport]);
-                    device.cmd_set_scissor(cmd, 0, &[scissor]);
-                }
-                let push = FacePush { light: [light[0], light[1], light[2], 1.0], face, pad: [0; 3] };
-                let stage = vk::ShaderStageFlags::VERTEX;
-                // SAFETY: as above; the layout has a vertex range of this size.
-                unsafe { device.cmd_push_constants(cmd, self.layout, stage, 0, bytemuck::bytes_of(&push)) };
-                for draw in &mesh.draws {
-                    // SAFETY: as above; the draw is one of the mesh's own index runs, whose
-                    // indices `GBufferMesh::new` checked.
-                    unsafe { device.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0) };
+        raster::render(ctx, cmd, &info, (self.pipeline, self.layout, None), || {
+            mesh.bind(ctx, cmd);
+            for (row, light) in lights.iter().take(rows as usize).enumerate() {
+                for face in 0..6u32 {
+                    let offset = vk::Offset2D { x: (face * SHADOW_SIZE) as i32, y: (row as u32 * SHADOW_SIZE) as i32 };
+                    let extent = vk::Extent2D { width: SHADOW_SIZE, height: SHADOW_SIZE };
+                    raster::set_viewport(ctx, cmd, vk::Rect2D { offset, extent });
+                    let push = FacePush { light: [light[0], light[1], light[2], 1.0], face, pad: [0; 3] };
+                    let stage = vk::ShaderStageFlags::VERTEX;
+                    // SAFETY: `cmd` is recording; the layout has a vertex range of this size.
+                    unsafe { device.cmd_push_constants(cmd, self.layout, stage, 0, bytemuck::bytes_of(&push)) };
+                    for draw in &mesh.draws {
+                        mesh.draw(ctx, cmd, draw);
+                    }
                 }
             }
-        }
-        // SAFETY: ends the rendering begun above.
-        unsafe { device.cmd_end_rendering(cmd) };
+        });
     }
 
     pub fn destroy(self, ctx: &Context) {

@@ -14,7 +14,7 @@ use crate::backend::resources::Image;
 use crate::backend::sync::{Access, Pass, ResourceStates, Use};
 use crate::error::{Result, VkContext};
 use crate::passes::mesh::{Draw, GBufferMesh};
-use crate::passes::raster::{cleared_depth, Raster, DEPTH_FORMAT};
+use crate::passes::raster::{self, cleared_depth, Raster, DEPTH_FORMAT};
 
 mod texel;
 
@@ -246,30 +246,6 @@ impl GBufferPass {
             .layer_count(1)
             .color_attachments(&attachments)
             .depth_attachment(&depth);
-        let viewport = vk::Viewport {
-            x: 0.0,
-            y: 0.0,
-            width: targets.extent.width as f32,
-            height: targets.extent.height as f32,
-            min_depth: 0.0,
-            max_depth: 1.0,
-        };
-        // SAFETY: `cmd` is recording, outside a render pass until this call; every object
-        // belongs to this device and outlives the frame (true of the blocks below too).
-        unsafe { device.cmd_begin_rendering(cmd, &info) };
-        // SAFETY: as above; the pipelines set the viewport and scissor dynamically.
-        unsafe {
-            device.cmd_set_viewport(cmd, 0, &[viewport]);
-            device.cmd_set_scissor(cmd, 0, &[area]);
-        }
-        if let Some(set) = &self.set {
-            let sets = [set.set];
-            // SAFETY: as above; the set matches the layout's set 0.
-            unsafe {
-                device.cmd_bind_descriptor_sets(cmd, vk::PipelineBindPoint::GRAPHICS, self.layout, 0, &sets, &[])
-            };
-        }
-        mesh.bind(ctx, cmd);
         // The scene, then each copy of the moving light with its own offset and scale.
         let still = std::iter::once((*camera, false));
         let copies = lights.iter().map(|l| {
@@ -280,28 +256,28 @@ impl GBufferPass {
             };
             (placed, true)
         });
-        let mut bound = None;
-        for (constants, moving) in still.chain(copies) {
-            let stage = vk::ShaderStageFlags::VERTEX;
-            // SAFETY: `cmd` is recording; the layout has a vertex range of this size.
-            unsafe { device.cmd_push_constants(cmd, self.layout, stage, 0, bytemuck::bytes_of(&constants)) };
-            // Objects whose bounds are outside the view cost no vertex work or triangle
-            // set-up.
-            let draws = mesh.draws.iter().filter(|d| (d.object + 1 == constants.light_object) == moving);
-            for draw in draws.filter(|d| d.visible(&constants)) {
-                if bound != Some(draw.textured) {
-                    let pipeline = self.pipelines[usize::from(draw.textured)];
-                    // SAFETY: `cmd` is recording inside this pass's rendering.
-                    unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline) };
-                    bound = Some(draw.textured);
+        let set = self.set.as_ref().map(|s| s.set);
+        raster::render(ctx, cmd, &info, (self.pipelines[0], self.layout, set), || {
+            mesh.bind(ctx, cmd);
+            let mut textured = false;
+            for (constants, moving) in still.chain(copies) {
+                let stage = vk::ShaderStageFlags::VERTEX;
+                // SAFETY: `cmd` is recording; the layout has a vertex range of this size.
+                unsafe { device.cmd_push_constants(cmd, self.layout, stage, 0, bytemuck::bytes_of(&constants)) };
+                // Objects whose bounds are outside the view cost no vertex work or triangle
+                // set-up.
+                let draws = mesh.draws.iter().filter(|d| (d.object + 1 == constants.light_object) == moving);
+                for draw in draws.filter(|d| d.visible(&constants)) {
+                    if textured != draw.textured {
+                        let pipeline = self.pipelines[usize::from(draw.textured)];
+                        // SAFETY: `cmd` is recording inside this pass's rendering.
+                        unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline) };
+                        textured = draw.textured;
+                    }
+                    mesh.draw(ctx, cmd, draw);
                 }
-                // SAFETY: a pipeline, the mesh's buffers and the constants are bound; the draw is
-                // one of the mesh's own index runs, whose indices `GBufferMesh::new` checked.
-                unsafe { device.cmd_draw_indexed(cmd, draw.index_count, 1, draw.first_index, 0, 0) };
             }
-        }
-        // SAFETY: as above; ends the rendering begun here.
-        unsafe { device.cmd_end_rendering(cmd) };
+        });
     }
 
     pub fn destroy(self, ctx: &Context) {
