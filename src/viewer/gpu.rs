@@ -9,11 +9,11 @@ use anyhow::{Context as _, Result};
 use rrf_baker::atomic_file::write_atomically;
 use rrf_baker::model::Model;
 use rrf_baker::scene::Scene;
-use rrf_renderer::backend::frames::FrameLoop;
+use rrf_renderer::backend::frames::{Deferred, FrameLoop};
 use rrf_renderer::backend::present::Presenter;
 use rrf_renderer::frame::{Drawn, FrameOutput, TIMESTAMPS};
 use rrf_renderer::passes::network::Variant;
-use rrf_renderer::{vk, Context};
+use rrf_renderer::{vk, Buffer, Context};
 
 use super::state::ViewerState;
 use crate::direct_mode::DirectMode;
@@ -108,19 +108,15 @@ impl ViewerGpu {
         let buffer = (!screenshots.is_empty()).then(|| ctx.create_readback_buffer(ldr)).transpose()?;
         let overlay = grid.as_ref().map(|g| (g, overlay_scale));
         let drawn = frame.gpu.draw(ctx, ring, presenter, &constants, overlay, buffer.as_ref());
-        let Some(buffer) = buffer else { return Ok(drawn.map(|_| ())?) };
-        if drawn? == Drawn::Skipped {
-            ctx.destroy_buffer(buffer);
-            return Ok(());
+        match (buffer, &drawn) {
+            (None, _) => {}
+            (Some(buffer), Ok(Drawn::Submitted)) => ring.defer(save_when_done(buffer, screenshots, ldr.extent, saved)),
+            // Never submitted: nothing uses it.
+            (Some(buffer), Ok(Drawn::Skipped)) => ctx.destroy_buffer(buffer),
+            // Maybe submitted: destroyed once the frame is done.
+            (Some(buffer), Err(_)) => ring.defer(Box::new(move |ctx: &Context| ctx.destroy_buffer(buffer))),
         }
-        let extent = ldr.extent;
-        ring.defer(Box::new(move |ctx: &Context| {
-            for path in screenshots {
-                let rgba = buffer.mapped().context("the screenshot buffer is not host-visible");
-                saved.borrow_mut().push(rgba.and_then(|rgba| save_png(&path, extent, rgba)).map(|()| path));
-            }
-            ctx.destroy_buffer(buffer);
-        }));
+        drawn?;
         Ok(())
     }
 
@@ -152,6 +148,24 @@ impl ViewerGpu {
         }
         Ok(())
     }
+}
+
+/// Work for the frame loop to do once the frame that copied its display image (`extent`) to
+/// `buffer` has finished: write it to each of `paths`, report each outcome in `saved`, and
+/// destroy the buffer.
+fn save_when_done(
+    buffer: Buffer,
+    paths: Vec<PathBuf>,
+    extent: vk::Extent2D,
+    saved: Rc<RefCell<Vec<Result<PathBuf>>>>,
+) -> Deferred {
+    Box::new(move |ctx: &Context| {
+        for path in paths {
+            let rgba = buffer.mapped().context("the screenshot buffer is not host-visible");
+            saved.borrow_mut().push(rgba.and_then(|rgba| save_png(&path, extent, rgba)).map(|()| path));
+        }
+        ctx.destroy_buffer(buffer);
+    })
 }
 
 /// Writes the RGBA8 pixels read back from the display image as an RGB PNG, through a
