@@ -10,9 +10,7 @@ use rrf_baker::network::{Component, Network};
 use rrf_baker::partition::Region;
 use rrf_baker::scene::{PlacedLight, Scene, View};
 use rrf_renderer::frame::{Frame, FrameConstants, FrameOutput, FramePixels, FrameScene, FrameShaders, Shown};
-use rrf_renderer::passes::network::{
-    LeafBlend, NetworkConstants, NetworkShaders, NetworkUnit, NetworkWeights, Variant,
-};
+use rrf_renderer::passes::network::{LeafBlend, NetworkShaders, NetworkUnit, NetworkWeights, Variant};
 use rrf_renderer::{vk, Context};
 
 use crate::direct_mode::DirectMode;
@@ -99,30 +97,28 @@ impl SceneFrame {
     }
 
     /// The passes' constants for a frame of `settings`.
-    pub fn constants(&self, settings: &FrameSettings) -> Result<FrameConstants> {
+    pub fn constants(&self, settings: &FrameSettings) -> FrameConstants {
         let extent = self.gpu.extent();
         let aspect = extent.width as f32 / extent.height as f32;
         let gbuffer = gbuffer_constants(&settings.view, aspect, self.light_object);
-        let lights = network_lights(&settings.lights);
-        let network = NetworkConstants::new(gbuffer.eye, &lights, settings.exposure_scale, settings.shown.code())?;
-        Ok(FrameConstants {
+        FrameConstants {
             gbuffer,
             light_copies: light_copies(self.default_light, &settings.lights),
-            network,
+            lights: network_lights(&settings.lights),
             exposure_scale: settings.exposure_scale,
             shown: settings.shown,
-        })
+        }
     }
 
     /// Renders one frame of `settings` and reads the HDR images back.
     pub fn render(&self, ctx: &Context, settings: &FrameSettings) -> Result<FramePixels> {
-        Ok(self.gpu.render(ctx, &self.constants(settings)?)?)
+        Ok(self.gpu.render(ctx, &self.constants(settings))?)
     }
 
     /// Renders one frame of `settings` and reads the display image back: RGBA in [0, 1],
     /// sRGB-encoded.
     pub fn render_display(&self, ctx: &Context, settings: &FrameSettings) -> Result<Vec<f32>> {
-        Ok(self.gpu.render_display(ctx, &self.constants(settings)?)?)
+        Ok(self.gpu.render_display(ctx, &self.constants(settings))?)
     }
 
     pub fn destroy(self, ctx: &Context) {

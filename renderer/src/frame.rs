@@ -18,6 +18,7 @@ use crate::backend::present::Presenter;
 use crate::backend::resources::{Buffer, Image};
 use crate::backend::sync::{read_back_passes, run_passes, Pass, Resource, ResourceStates};
 use crate::error::{Error, Result};
+use crate::lights::NetworkLight;
 use crate::passes::gbuffer::{GBufferConstants, GBufferPass, GBufferTargets, GBufferTexel, LightCopy};
 use crate::passes::mesh::{GBufferMesh, GBufferVertex, SurfaceMaterial};
 use crate::passes::network::{DirectLight, NetworkConstants, NetworkPass, NetworkShaders, NetworkUnit, Variant};
@@ -104,7 +105,8 @@ pub struct FrameConstants {
     pub gbuffer: GBufferConstants,
     /// Where the G-buffer draws the moving light's geometry, one copy per light.
     pub light_copies: Vec<LightCopy>,
-    pub network: NetworkConstants,
+    /// The lights, as the network pass reads them (1 to [`crate::lights::MAX_LIGHTS`]).
+    pub lights: Vec<NetworkLight>,
     /// 2^EV.
     pub exposure_scale: f32,
     pub shown: Shown,
@@ -334,7 +336,9 @@ impl Frame {
         };
         stamp(&mut passes, 1);
         let display = self.network.outputs().is_none().then_some(&self.ldr);
-        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, constants.network, display)?);
+        let c = constants;
+        let network = NetworkConstants::new(c.gbuffer.eye, &c.lights, c.exposure_scale, c.shown.code())?;
+        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display)?);
         stamp(&mut passes, 2);
         if let Some(outputs) = self.network.outputs() {
             let (tonemap, hdr) = match constants.shown {

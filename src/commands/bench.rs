@@ -215,7 +215,7 @@ impl Bench<'_> {
     /// The image bytes per pixel of a frame of `settings`, its timings, and the object ids
     /// of its pixels.
     fn measure(&self, frame: &SceneFrame, settings: &FrameSettings) -> Result<(u32, Stats, Vec<u32>)> {
-        let constants = frame.constants(settings)?;
+        let constants = frame.constants(settings);
         let bytes_per_pixel = frame.gpu.bytes_per_pixel(self.ctx, &constants)?;
         let stats = self.time_frames(&frame.gpu, &constants)?;
         Ok((bytes_per_pixel, stats, frame.gpu.read_objects(self.ctx)?))

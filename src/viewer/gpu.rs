@@ -103,7 +103,7 @@ impl ViewerGpu {
             stats.add_timestamps(&stamps, period);
         }
         let grid = state.overlay.then(|| state.overlay_text(stats, &ctx.info.name));
-        let constants = frame.constants(&state.settings())?;
+        let constants = frame.constants(&state.settings());
         let ldr = frame.gpu.ldr();
         let buffer = (!screenshots.is_empty()).then(|| ctx.create_readback_buffer(ldr)).transpose()?;
         let overlay = grid.as_ref().map(|g| (g, overlay_scale));
