@@ -381,7 +381,8 @@ impl Importer<'_> {
                 found.objects.push(object);
             }
             if let Some(light) = node.light() {
-                let light = self.point_light(&element, &node, &light, world, sidecar.units.point_lights)?;
+                let light =
+                    self.point_light(&element, (&node_name, node.index()), &light, world, sidecar.units.point_lights)?;
                 found.point_lights.extend(light);
             }
             if let Some(camera) = node.camera() {
@@ -421,12 +422,12 @@ impl Importer<'_> {
         Ok(found)
     }
 
-    /// The point or spot light of `node` (`element`) at `world`, its intensity read in
-    /// `units`; a directional light is skipped with a warning.
+    /// The point or spot light of node `node` called `name` (`element`) at `world`, its
+    /// intensity read in `units`; a directional light is skipped with a warning.
     fn point_light(
         &mut self,
         element: &str,
-        node: &gltf::Node,
+        (name, node): (&str, usize),
         light: &gltf::khr_lights_punctual::Light,
         world: Mat4,
         units: PointLightUnits,
@@ -450,8 +451,8 @@ impl Importer<'_> {
             )));
         }
         Ok(Some(PointLight {
-            name: node.name().map(str::to_owned).unwrap_or_else(|| format!("node{}", node.index())),
-            node: Some(node.index()),
+            name: name.to_owned(),
+            node: Some(node),
             position: world.transform_point3(Vec3::ZERO),
             intensity,
             cone: spot_cone(light, &world).map_err(err)?,
