@@ -2,10 +2,11 @@
 //! camera matches the path tracer's ([`rrf_baker::trace::Camera`]) pixel for pixel.
 
 use rrf_baker::glam::{Mat4, Vec3, Vec4};
-use rrf_baker::scene::{self, AlphaMode, ColorSpace, LightKind, PlacedLight, Scene, View};
+use rrf_baker::scene::{self, AlphaMode, ColorSpace, LightKind, Mirror, PlacedLight, Scene, View};
 use rrf_renderer::lights::{NetworkLight, PointLightShape, Spot};
 use rrf_renderer::passes::gbuffer::{GBufferConstants, LightCopy};
 use rrf_renderer::passes::mesh::{GBufferVertex, SurfaceMaterial, TextureRef};
+use rrf_renderer::passes::mirror::Reflected;
 
 /// The object id of the moving light's own geometry (an area light), if it has any.
 pub fn moving_light_object(scene: &Scene) -> Option<u32> {
@@ -145,6 +146,19 @@ pub fn surface_materials(scene: &Scene) -> (Vec<SurfaceMaterial>, Vec<u32>) {
 /// 0 at `NEAR` to 1 at `FAR`), and object `light_object` (the moving light's), which the pass
 /// draws once per light copy.
 pub fn gbuffer_constants(view: &View, aspect: f32, light_object: Option<u32>) -> GBufferConstants {
+    let (world_to_view, projection) = camera_matrices(view, aspect);
+    GBufferConstants {
+        view_projection: (projection * world_to_view).to_cols_array_2d(),
+        eye: view.eye.extend(1.0).to_array(),
+        light_offset: [0.0; 4],
+        light_scale: [1.0; 4],
+        light_object: light_object.map_or(0, |id| id + 1),
+        pad: [0; 3],
+    }
+}
+
+/// The view's world-to-view matrix (right-handed, looking down -z) and its projection.
+fn camera_matrices(view: &View, aspect: f32) -> (Mat4, Mat4) {
     const NEAR: f32 = 0.01;
     const FAR: f32 = 1000.0;
     let forward = (view.target - view.eye).normalize();
@@ -164,12 +178,41 @@ pub fn gbuffer_constants(view: &View, aspect: f32, light_object: Option<u32>) ->
         Vec4::new(0.0, 0.0, a, -1.0),
         Vec4::new(0.0, 0.0, b, 0.0),
     );
-    GBufferConstants {
-        view_projection: (projection * world_to_view).to_cols_array_2d(),
-        eye: view.eye.extend(1.0).to_array(),
-        light_offset: [0.0; 4],
-        light_scale: [1.0; 4],
-        light_object: light_object.map_or(0, |id| id + 1),
-        pad: [0; 3],
+    (world_to_view, projection)
+}
+
+/// `mirror` as a frame from `view` sees it: the scene reflected in its plane and seen from
+/// `view`, clipped to what lies in front of the mirror (Lengyel's oblique near plane, so that
+/// nothing behind the mirror shows in it). `None` when the camera is in the mirror's plane.
+pub fn reflected(view: &View, aspect: f32, light_object: Option<u32>, mirror: &Mirror) -> Option<Reflected> {
+    let normal = mirror.normal_towards(view.eye)?;
+    // The plane on the camera's side: n·p = d.
+    let d = mirror.offset * normal.dot(mirror.normal);
+    let reflection = Mat4::from_cols(
+        (Vec3::X - 2.0 * normal.x * normal).extend(0.0),
+        (Vec3::Y - 2.0 * normal.y * normal).extend(0.0),
+        (Vec3::Z - 2.0 * normal.z * normal).extend(0.0),
+        (2.0 * d * normal).extend(1.0),
+    );
+    let (world_to_view, mut projection) = camera_matrices(view, aspect);
+    let seen_to_view = world_to_view * reflection;
+    // Geometry closer to the mirror's plane than this is the mirror itself, or behind it.
+    let gap = 1e-4 * (1.0 + d.abs());
+    let plane = seen_to_view.inverse().transpose() * normal.extend(-d - gap);
+    let clip_plane = projection.inverse().transpose() * plane;
+    let corner = projection.inverse() * Vec4::new(clip_plane.x.signum(), clip_plane.y.signum(), 1.0, 1.0);
+    let scale = projection.row(3).dot(corner) / plane.dot(corner);
+    for column in 0..4 {
+        projection.col_mut(column)[2] = scale * plane[column];
     }
+    let eye = reflection.transform_point3(view.eye);
+    Some(Reflected {
+        object: mirror.object,
+        normal: normal.to_array(),
+        gbuffer: GBufferConstants {
+            view_projection: (projection * seen_to_view).to_cols_array_2d(),
+            eye: eye.extend(1.0).to_array(),
+            ..gbuffer_constants(view, aspect, light_object)
+        },
+    })
 }

@@ -8,15 +8,16 @@ use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::network::{Component, Network};
 use rrf_baker::partition::Region;
-use rrf_baker::scene::{PlacedLight, Scene, View};
+use rrf_baker::scene::{Aabb, Mirror, PlacedLight, Scene, View};
 use rrf_renderer::frame::{Frame, FrameConstants, FrameOutput, FramePixels, FrameScene, FrameShaders, Shown};
+use rrf_renderer::passes::gbuffer::box_in_view;
 use rrf_renderer::passes::network::{LeafBlend, NetworkShaders, NetworkUnit, NetworkWeights, Variant};
 use rrf_renderer::{vk, Context};
 
 use crate::direct_mode::DirectMode;
 use crate::gpu_scene::{
     analytic_light, gbuffer_constants, gbuffer_mesh, light_copies, moving_light_object, network_lights,
-    network_materials, surface_materials,
+    network_materials, reflected, surface_materials,
 };
 use crate::shaders;
 
@@ -34,6 +35,7 @@ const FRAME_SHADERS: FrameShaders<'static> = FrameShaders {
     shadow_vertex: shaders::SHADOW_VERT,
     shadow_fragment: shaders::SHADOW_FRAG,
     tonemap: shaders::TONEMAP_COMP,
+    mirror: shaders::MIRROR_COMP,
     overlay: shaders::OVERLAY_COMP,
     font: &font8x8::legacy::BASIC_LEGACY,
 };
@@ -57,6 +59,8 @@ pub struct SceneFrame {
     default_light: Vec3,
     /// The object id of the moving light's own geometry, which follows the light.
     light_object: Option<u32>,
+    /// The scene's planar mirrors and their bounds.
+    mirrors: Vec<(Mirror, Aabb)>,
 }
 
 impl SceneFrame {
@@ -88,11 +92,13 @@ impl SceneFrame {
             materials: &network_materials(scene),
             units: &units,
             analytic_light,
+            mirrors: !scene.mirrors().is_empty(),
         };
         Ok(SceneFrame {
             gpu: Frame::new(ctx, &FRAME_SHADERS, &frame_scene, variant, extent, output)?,
             default_light: scene.default_light().position,
             light_object: moving_light_object(scene),
+            mirrors: scene.mirrors().into_iter().map(|m| (m, scene.objects[m.object as usize].bounds())).collect(),
         })
     }
 
@@ -101,12 +107,16 @@ impl SceneFrame {
         let extent = self.gpu.extent();
         let aspect = extent.width as f32 / extent.height as f32;
         let gbuffer = gbuffer_constants(&settings.view, aspect, self.light_object);
+        let in_view = |b: &Aabb| box_in_view(&gbuffer.view_projection, b.min.to_array(), b.max.to_array());
+        let mirrors = self.mirrors.iter().filter(|(_, bounds)| in_view(bounds));
+        let mirrors = mirrors.filter_map(|(m, _)| reflected(&settings.view, aspect, self.light_object, m)).collect();
         FrameConstants {
             gbuffer,
             light_copies: light_copies(self.default_light, &settings.lights),
             lights: network_lights(&settings.lights),
             exposure_scale: settings.exposure_scale,
             shown: settings.shown,
+            mirrors,
         }
     }
 
@@ -150,6 +160,11 @@ pub fn network_units<'a>(scene: &Scene, model: &'a Model, direct: DirectMode) ->
     let whole = |n: &'a Network| NetworkWeights { blend: LeafBlend::WHOLE, ..weights(n) };
     let mut units = Vec::new();
     for (id, o) in scene.objects.iter().enumerate() {
+        // A mirror shows what it reflects, not networks (a model from before it was one may
+        // hold some).
+        if scene.is_mirror(id as u32) {
+            continue;
+        }
         let indirect = model.networks(&o.name, Component::Indirect);
         if direct == DirectMode::Analytic {
             let unit = |i: &&'a Network| NetworkUnit { object: id, direct: whole(i), indirect: weights(i) };

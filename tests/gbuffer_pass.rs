@@ -26,8 +26,10 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
     let (materials, texture_texels) = surface_materials(&scene);
     let mesh = GBufferMesh::new(&ctx, &vertices, &indices, &materials, &texture_texels).unwrap();
     let pass = GBufferPass::new(&ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG, &mesh).unwrap();
-    ctx.submit_once(|cmd| pass.record(&ctx, cmd, &targets, &mesh, &gbuffer_constants(&view, aspect, None), &[]))
-        .unwrap();
+    ctx.submit_once(|cmd| {
+        pass.record(&ctx, cmd, &targets, &mesh, (&gbuffer_constants(&view, aspect, None), false), &[])
+    })
+    .unwrap();
     let surface = ctx.read_image(&targets.surface, vk::ImageLayout::GENERAL).unwrap();
     let id = ctx.read_image(&targets.id, vk::ImageLayout::GENERAL).unwrap();
     let shading = ctx.read_image(&targets.shading, vk::ImageLayout::GENERAL).unwrap();

@@ -4,6 +4,10 @@
 //! ([`Frame::draw`], with a [`FrameLoop`] and optionally a window's [`Presenter`]) or into a
 //! one-off submission that reads images back ([`Frame::render`]).
 //!
+//! In a scene with planar mirrors the G-buffer and network passes run again for each mirror
+//! in view, on the scene seen in it, and the mirror pass adds what they saw
+//! ([`crate::passes::mirror`]).
+//!
 //! Camera, lights, exposure and the component shown are per-frame constants: one `Frame`
 //! serves every configuration of its size, and `resize` remakes only what depends on the size.
 
@@ -21,7 +25,10 @@ use crate::error::{Error, Result};
 use crate::lights::NetworkLight;
 use crate::passes::gbuffer::{GBufferConstants, GBufferPass, GBufferTargets, GBufferTexel, LightCopy};
 use crate::passes::mesh::{GBufferMesh, GBufferVertex, SurfaceMaterial};
-use crate::passes::network::{DirectLight, NetworkConstants, NetworkPass, NetworkShaders, NetworkUnit, Variant};
+use crate::passes::mirror::{MirrorPass, Reflected};
+use crate::passes::network::{
+    DirectLight, NetworkConstants, NetworkOutputs, NetworkPass, NetworkShaders, NetworkUnit, Variant,
+};
 use crate::passes::overlay::{OverlayPass, TextGrid};
 use crate::passes::tonemap::TonemapPass;
 
@@ -79,6 +86,7 @@ pub struct FrameShaders<'a> {
     pub shadow_vertex: &'a [u32],
     pub shadow_fragment: &'a [u32],
     pub tonemap: &'a [u32],
+    pub mirror: &'a [u32],
     pub overlay: &'a [u32],
     /// 8×8 glyphs of ASCII, one byte per row.
     pub font: &'a [[u8; 8]; 128],
@@ -97,6 +105,8 @@ pub struct FrameScene<'a> {
     pub units: &'a [NetworkUnit<'a>],
     /// Direct light from the networks, or computed for this point light.
     pub analytic_light: Option<crate::lights::PointLightShape>,
+    /// Whether the scene has planar mirrors, which frames then draw the reflections of.
+    pub mirrors: bool,
 }
 
 /// What changes from frame to frame, as the passes read it.
@@ -110,6 +120,8 @@ pub struct FrameConstants {
     /// 2^EV.
     pub exposure_scale: f32,
     pub shown: Shown,
+    /// The mirrors whose reflecting side the camera is on (none in a scene without mirrors).
+    pub mirrors: Vec<Reflected>,
 }
 
 /// Images of one frame, read back: RGBA per pixel, rows top to bottom.
@@ -140,6 +152,8 @@ pub struct Frame {
     /// writes the display image itself).
     tonemaps: Vec<TonemapPass>,
     overlay: OverlayPass,
+    /// The passes that draw what mirrors reflect, in a scene with mirrors.
+    reflection: Option<Reflection>,
     /// Where every image of the frame was left, for the barriers of the next pass.
     states: RefCell<ResourceStates>,
 }
@@ -160,28 +174,35 @@ impl Frame {
         let mesh = ctx.guard(GBufferMesh::new(ctx, scene.vertices, scene.indices, scene.surfaces, scene.texels)?);
         let gbuffer = ctx.guard(GBufferPass::new(ctx, shaders.gbuffer_vertex, shaders.gbuffer_fragment, &mesh)?);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
-        // Units that blend add to each other's radiance images; the frame then tonemaps those.
+        // Units that blend add to each other's radiance images, and mirrors add to their own
+        // pixels; the frame then tonemaps those.
         let blended = scene.units.iter().any(NetworkUnit::blends);
-        let display = (output == FrameOutput::Display && variant != Variant::Storage && !blended).then_some(&*ldr);
-        let direct = match scene.analytic_light {
-            None => DirectLight::Learned,
-            Some(light) => DirectLight::Analytic {
-                light,
-                shadow_vertex: shaders.shadow_vertex,
-                shadow_fragment: shaders.shadow_fragment,
-            },
+        let writes_display = output == FrameOutput::Display && variant != Variant::Storage && !blended;
+        let display = (writes_display && !scene.mirrors).then_some(&*ldr);
+        let network_pass = |targets: &GBufferTargets, display| {
+            let direct = match scene.analytic_light {
+                None => DirectLight::Learned,
+                Some(light) => DirectLight::Analytic {
+                    light,
+                    shadow_vertex: shaders.shadow_vertex,
+                    shadow_fragment: shaders.shadow_fragment,
+                },
+            };
+            let (objects, units, materials) = (scene.objects, scene.units, scene.materials);
+            NetworkPass::new(ctx, variant, &shaders.network, targets, objects, units, materials, display, direct)
         };
-        let network = ctx.guard(NetworkPass::new(
-            ctx,
-            variant,
-            &shaders.network,
-            &targets,
-            scene.objects,
-            scene.units,
-            scene.materials,
-            display,
-            direct,
-        )?);
+        let network = ctx.guard(network_pass(&targets, display)?);
+        let reflection = match (scene.mirrors, network.outputs()) {
+            (true, Some(frame)) => {
+                let targets_seen = ctx.guard(GBufferTargets::new(ctx, extent)?);
+                let network_seen = ctx.guard(network_pass(&targets_seen, None)?);
+                let seen = network_seen.outputs().expect("a network pass without a display image has outputs");
+                let pass = MirrorPass::new(ctx, shaders.mirror, &targets, seen, frame)?;
+                Some(Reflection { targets: targets_seen.keep(), network: network_seen.keep(), pass })
+            }
+            _ => None,
+        };
+        let reflection = ctx.guard(reflection);
         let mut tonemaps = ctx.guard(Vec::with_capacity(3));
         for hdr in network.outputs().into_iter().flat_map(|o| [&o.gi, &o.direct, &o.indirect]) {
             tonemaps.push(TonemapPass::new(ctx, shaders.tonemap, hdr, &ldr)?);
@@ -195,6 +216,7 @@ impl Frame {
             ldr: ldr.keep(),
             tonemaps: tonemaps.keep(),
             overlay,
+            reflection: reflection.keep(),
             states: RefCell::default(),
         };
         frame.register();
@@ -206,6 +228,10 @@ impl Frame {
         let mut states = self.states.borrow_mut();
         self.targets.register(&mut states);
         self.network.register(&mut states);
+        if let Some(r) = &self.reflection {
+            r.targets.register(&mut states);
+            r.network.register(&mut states);
+        }
         states.set_layout(&self.ldr, vk::ImageLayout::GENERAL);
     }
 
@@ -228,6 +254,9 @@ impl Frame {
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
         let display = self.network.outputs().is_none().then_some(&*ldr);
         self.network.resize(ctx, &targets, display)?;
+        if let (Some(r), Some(frame)) = (&mut self.reflection, self.network.outputs()) {
+            r.resize(ctx, extent, &targets, frame)?;
+        }
         std::mem::replace(&mut self.targets, targets.keep()).destroy(ctx);
         ctx.destroy_image(std::mem::replace(&mut self.ldr, ldr.keep()));
         let hdr = self.network.outputs().into_iter().flat_map(|o| [&o.gi, &o.direct, &o.indirect]);
@@ -328,7 +357,7 @@ impl Frame {
         extra: Vec<Pass<'a>>,
     ) -> Result<Vec<Pass<'a>>> {
         let copies = constants.light_copies.clone();
-        let mut passes = vec![self.gbuffer.pass(ctx, &self.targets, &self.mesh, constants.gbuffer, copies)];
+        let mut passes = vec![self.gbuffer.pass(ctx, &self.targets, &self.mesh, constants.gbuffer, copies, false)];
         let stamp = |passes: &mut Vec<Pass>, index: u32| {
             if let (Some(pool), Some(last)) = (timestamps, passes.last_mut()) {
                 last.timestamp = Some((pool, index));
@@ -339,6 +368,11 @@ impl Frame {
         let c = constants;
         let network = NetworkConstants::new(c.gbuffer.eye, &c.lights, c.exposure_scale, c.shown.code())?;
         passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display)?);
+        if let (Some(r), Some(frame)) = (&self.reflection, self.network.outputs()) {
+            for mirror in &constants.mirrors {
+                passes.extend(r.passes(ctx, self, constants, mirror, frame)?);
+            }
+        }
         stamp(&mut passes, 2);
         if let Some(outputs) = self.network.outputs() {
             let (tonemap, hdr) = match constants.shown {
@@ -414,6 +448,7 @@ impl Frame {
 
 impl Destroy for Frame {
     fn destroy(self, ctx: &Context) {
+        self.reflection.destroy(ctx);
         self.overlay.destroy(ctx);
         for pass in self.tonemaps {
             pass.destroy(ctx);
@@ -422,6 +457,61 @@ impl Destroy for Frame {
         self.network.destroy(ctx);
         self.gbuffer.destroy(ctx);
         self.mesh.destroy(ctx);
+        self.targets.destroy(ctx);
+    }
+}
+
+/// What draws the scene seen in a mirror: its own G-buffer and network pass, and the pass that
+/// adds what they saw to the mirror's pixels.
+struct Reflection {
+    targets: GBufferTargets,
+    network: NetworkPass,
+    pass: MirrorPass,
+}
+
+impl Reflection {
+    /// Remakes the images for `extent` and points the mirror pass at the frame's new
+    /// `gbuffer` and radiance images `frame`.
+    fn resize(
+        &mut self,
+        ctx: &Context,
+        extent: vk::Extent2D,
+        gbuffer: &GBufferTargets,
+        frame: &NetworkOutputs,
+    ) -> Result<()> {
+        let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
+        self.network.resize(ctx, &targets, None)?;
+        std::mem::replace(&mut self.targets, targets.keep()).destroy(ctx);
+        let seen = self.network.outputs().expect("the reflection's network pass has outputs");
+        self.pass.rebind(ctx, gbuffer, seen, frame);
+        Ok(())
+    }
+
+    /// The passes that add what `mirror` reflects to the radiance images `frame` of the frame
+    /// `owner` draws with `constants`.
+    fn passes<'a>(
+        &'a self,
+        ctx: &'a Context,
+        owner: &'a Frame,
+        constants: &FrameConstants,
+        mirror: &Reflected,
+        frame: &'a NetworkOutputs,
+    ) -> Result<Vec<Pass<'a>>> {
+        let copies = constants.light_copies.clone();
+        let mut passes = vec![owner.gbuffer.pass(ctx, &self.targets, &owner.mesh, mirror.gbuffer, copies, true)];
+        let c = constants;
+        let network = NetworkConstants::new(mirror.gbuffer.eye, &c.lights, c.exposure_scale, c.shown.code())?;
+        passes.extend(self.network.passes(ctx, &self.targets, &owner.mesh, network, None)?);
+        let seen = self.network.outputs().expect("the reflection's network pass has outputs");
+        passes.push(self.pass.pass(ctx, (&owner.targets, seen, frame), mirror, constants.gbuffer.eye));
+        Ok(passes)
+    }
+}
+
+impl Destroy for Reflection {
+    fn destroy(self, ctx: &Context) {
+        self.pass.destroy(ctx);
+        self.network.destroy(ctx);
         self.targets.destroy(ctx);
     }
 }

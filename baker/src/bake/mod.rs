@@ -713,9 +713,11 @@ fn borrow_samples(scene: &Scene, all: &[Sample], object: u32, min_samples: usize
     Some((moved, reason))
 }
 
-/// Whether `object` gets networks: every object but pure emitters, which show their emission.
+/// Whether `object` gets networks: every object but pure emitters, which show their emission,
+/// and planar mirrors, which show what they reflect (`scene/mirror.rs`).
 fn learns(scene: &Scene, object: u32) -> bool {
-    scene.objects[object as usize].parts.iter().any(|p| !scene.materials[p.material as usize].is_plain_emitter())
+    let parts = &scene.objects[object as usize].parts;
+    parts.iter().any(|p| !scene.materials[p.material as usize].is_plain_emitter()) && !scene.is_mirror(object)
 }
 
 /// The samples of one sampling pass, and how many of its shards came from the cache.

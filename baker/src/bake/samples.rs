@@ -159,9 +159,12 @@ fn sample_along(
     let hit = world.intersect(config.viewpoint, dir)?;
     let si = world.interaction(config.viewpoint, dir, hit);
     let material = &world.scene.materials[world.geometry.triangles[hit.triangle as usize].material as usize];
-    // Emitters show their emission and learn nothing; the inside of a closed one-sided
-    // surface is never seen.
-    if material.is_plain_emitter() || (!si.front_face && !material.double_sided) || only.is_some_and(|o| o != si.object)
+    // Emitters show their emission and mirrors what they reflect: they learn nothing. The
+    // inside of a closed one-sided surface is never seen.
+    if material.is_plain_emitter()
+        || world.geometry.mirrors[si.object as usize].is_some()
+        || (!si.front_face && !material.double_sided)
+        || only.is_some_and(|o| o != si.object)
     {
         return None;
     }

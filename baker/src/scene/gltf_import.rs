@@ -82,6 +82,8 @@ pub(super) fn import(
         content_hash: 0,
         light_transport_hash: 0,
     };
+    let curved_mirrors = scene.curved_mirror_warnings();
+    scene.warnings.extend(curved_mirrors);
     (scene.content_hash, scene.light_transport_hash) = content_hashes(&scene);
     Ok(scene)
 }

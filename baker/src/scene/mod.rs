@@ -15,6 +15,7 @@ mod content_hash;
 mod error;
 mod external;
 mod gltf_import;
+mod mirror;
 mod sidecar;
 mod texture;
 
@@ -24,6 +25,7 @@ use std::path::{Path, PathBuf};
 use glam::{Vec2, Vec3, Vec4};
 
 pub use error::SceneError;
+pub use mirror::Mirror;
 pub use sidecar::{Aabb, BakeOverrides, BakePresets, EvalDefaults, PointLightUnits, Sidecar, Units, ViewSpec};
 
 /// Candela per W/sr: the luminous efficacy of 555 nm light, which rrf applies to every channel

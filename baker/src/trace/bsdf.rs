@@ -43,7 +43,8 @@ pub struct BsdfSample {
     pub pdf: f32,
 }
 
-fn schlick(f0: Vec3, cos: f32) -> Vec3 {
+/// Schlick's Fresnel term for reflectance `f0` at normal incidence, at `cos` from the normal.
+pub fn schlick(f0: Vec3, cos: f32) -> Vec3 {
     let m = (1.0 - cos).clamp(0.0, 1.0);
     let m5 = (m * m) * (m * m) * m;
     f0 + (Vec3::ONE - f0) * m5

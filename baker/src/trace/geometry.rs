@@ -11,7 +11,7 @@ use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 
-use crate::scene::{AlphaMode, LightKind, Scene};
+use crate::scene::{AlphaMode, LightKind, Mirror, Scene};
 
 /// A triangle's vertices (indices into the global vertex arrays), object and material.
 #[derive(Clone, Copy, Debug)]
@@ -43,6 +43,8 @@ pub struct Geometry {
     pub tangents: Vec<Vec4>,
     /// Triangle ids of the moving area light, not in the BVH.
     pub moving: Vec<u32>,
+    /// Per object id, its plane if it is a planar mirror ([`Scene::mirrors`]).
+    pub mirrors: Vec<Option<Mirror>>,
 }
 
 /// The alpha test: whether the masked triangle of `hit` is there, at `hit.t` along the ray
@@ -85,6 +87,7 @@ impl Geometry {
             uvs: Vec::new(),
             tangents: Vec::new(),
             moving: Vec::new(),
+            mirrors: scene.mirror_by_object(),
         };
         for object in &scene.objects {
             let base = g.positions.len() as u32;

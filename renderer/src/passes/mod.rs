@@ -3,6 +3,7 @@
 
 pub mod gbuffer;
 pub mod mesh;
+pub mod mirror;
 pub mod network;
 pub mod overlay;
 pub mod raster;

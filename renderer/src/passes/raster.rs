@@ -23,12 +23,15 @@ pub(crate) fn cleared_depth(depth: &Image) -> vk::RenderingAttachmentInfo<'stati
 
 /// Records a dynamic rendering of `info` into `cmd` (recording, outside a render pass):
 /// `draw` records what is drawn inside it, with the viewport and scissor set to the render
-/// area and `pipeline` bound with `layout`'s set 0 (`set`, if any).
+/// area and `pipeline` bound with `layout`'s set 0 (`set`, if any). `mirrored` says the view
+/// is seen in a mirror, which turns the scene's counter-clockwise front faces clockwise on
+/// screen.
 pub(crate) fn render(
     ctx: &Context,
     cmd: vk::CommandBuffer,
     info: &vk::RenderingInfo,
     (pipeline, layout, set): (vk::Pipeline, vk::PipelineLayout, Option<vk::DescriptorSet>),
+    mirrored: bool,
     draw: impl FnOnce(),
 ) {
     let device = &ctx.device;
@@ -37,6 +40,9 @@ pub(crate) fn render(
     // attachments, the pipeline and the set belong to this device and outlive the frame.
     unsafe { device.cmd_begin_rendering(cmd, info) };
     set_viewport(ctx, cmd, area);
+    let front = if mirrored { vk::FrontFace::CLOCKWISE } else { vk::FrontFace::COUNTER_CLOCKWISE };
+    // SAFETY: as above; every pipeline of `Raster` takes the front face dynamically.
+    unsafe { device.cmd_set_front_face(cmd, front) };
     // SAFETY: as above.
     unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline) };
     if let Some(set) = set {
@@ -79,7 +85,7 @@ pub(crate) struct Raster<'a> {
 
 impl Raster<'_> {
     /// One pipeline per value of specialization constant 0, with `layout`. No face culling;
-    /// viewport and scissor are dynamic. The caller destroys the pipelines.
+    /// viewport, scissor and front face are dynamic. The caller destroys the pipelines.
     pub(crate) fn pipelines(
         &self,
         ctx: &Context,
@@ -120,11 +126,11 @@ impl Raster<'_> {
             vk::PipelineInputAssemblyStateCreateInfo::default().topology(vk::PrimitiveTopology::TRIANGLE_LIST);
         let viewport = vk::PipelineViewportStateCreateInfo::default().viewport_count(1).scissor_count(1);
         // The projection's y flip and Vulkan's y-down framebuffer cancel: front faces are
-        // counter-clockwise on screen, as in the scene.
+        // counter-clockwise on screen, as in the scene, except in a mirror (`render` sets the
+        // front face).
         let raster = vk::PipelineRasterizationStateCreateInfo::default()
             .polygon_mode(vk::PolygonMode::FILL)
             .cull_mode(vk::CullModeFlags::NONE)
-            .front_face(vk::FrontFace::COUNTER_CLOCKWISE)
             .line_width(1.0);
         let multisample =
             vk::PipelineMultisampleStateCreateInfo::default().rasterization_samples(vk::SampleCountFlags::TYPE_1);
@@ -138,7 +144,7 @@ impl Raster<'_> {
             self.color_formats.len()
         ];
         let blending = vk::PipelineColorBlendStateCreateInfo::default().attachments(&blend);
-        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR];
+        let dynamic_states = [vk::DynamicState::VIEWPORT, vk::DynamicState::SCISSOR, vk::DynamicState::FRONT_FACE];
         let dynamic = vk::PipelineDynamicStateCreateInfo::default().dynamic_states(&dynamic_states);
         let mut rendering = vk::PipelineRenderingCreateInfo::default()
             .color_attachment_formats(self.color_formats)

@@ -130,7 +130,7 @@ impl ShadowPass {
             .layer_count(1)
             .color_attachments(&color)
             .depth_attachment(&depth);
-        raster::render(ctx, cmd, &info, (self.pipeline, self.layout, None), || {
+        raster::render(ctx, cmd, &info, (self.pipeline, self.layout, None), false, || {
             mesh.bind(ctx, cmd);
             for (row, light) in lights.iter().take(rows as usize).enumerate() {
                 for face in 0..6u32 {

@@ -115,26 +115,29 @@ impl Destroy for GBufferTargets {
 }
 
 impl Draw {
-    /// Whether any of the run's bounds can be in the view of `c` (conservative: a box is
-    /// culled only when all its corners are outside one plane of the clip volume).
+    /// Whether any of the run's bounds can be in the view of `c` (see [`box_in_view`]).
     pub(crate) fn visible(&self, c: &GBufferConstants) -> bool {
         let offset = if self.object + 1 == c.light_object { c.light_offset } else { [0.0; 4] };
-        let m = &c.view_projection;
-        let mut outside = [true; 6];
-        for corner in 0..8 {
-            let pick = |axis: usize| {
-                let v = if corner & (1 << axis) == 0 { self.min[axis] } else { self.max[axis] };
-                v + offset[axis]
-            };
-            let p = [pick(0), pick(1), pick(2), 1.0];
-            let clip: [f32; 4] = std::array::from_fn(|row| (0..4).map(|col| m[col][row] * p[col]).sum());
-            let (x, y, z, w) = (clip[0], clip[1], clip[2], clip[3]);
-            for (plane, beyond) in [x > w, x < -w, y > w, y < -w, z < 0.0, z > w].into_iter().enumerate() {
-                outside[plane] &= beyond;
-            }
-        }
-        !outside.contains(&true)
+        let moved = |corner: [f32; 3]| std::array::from_fn(|axis| corner[axis] + offset[axis]);
+        box_in_view(&c.view_projection, moved(self.min), moved(self.max))
     }
+}
+
+/// Whether any of the box from `min` to `max` can be in the view of the view-projection `m`
+/// (column-major), conservatively: a box is out only when all its corners are outside one
+/// plane of the clip volume.
+pub fn box_in_view(m: &[[f32; 4]; 4], min: [f32; 3], max: [f32; 3]) -> bool {
+    let mut outside = [true; 6];
+    for corner in 0..8 {
+        let pick = |axis: usize| if corner & (1 << axis) == 0 { min[axis] } else { max[axis] };
+        let p = [pick(0), pick(1), pick(2), 1.0];
+        let clip: [f32; 4] = std::array::from_fn(|row| (0..4).map(|col| m[col][row] * p[col]).sum());
+        let (x, y, z, w) = (clip[0], clip[1], clip[2], clip[3]);
+        for (plane, beyond) in [x > w, x < -w, y > w, y < -w, z < 0.0, z > w].into_iter().enumerate() {
+            outside[plane] &= beyond;
+        }
+    }
+    !outside.contains(&true)
 }
 
 pub struct GBufferPass {
@@ -195,7 +198,8 @@ impl GBufferPass {
         Ok(pass.keep())
     }
 
-    /// The pass for a frame list: it writes every target and reads the mesh.
+    /// The pass for a frame list: it writes every target and reads the mesh. `mirrored`: the
+    /// constants view the scene in a mirror (their view-projection reflects it).
     pub fn pass<'a>(
         &'a self,
         ctx: &'a Context,
@@ -203,6 +207,7 @@ impl GBufferPass {
         mesh: &'a GBufferMesh,
         constants: GBufferConstants,
         lights: Vec<LightCopy>,
+        mirrored: bool,
     ) -> Pass<'a> {
         let mut uses: Vec<Use> =
             targets.colors().iter().map(|i| Use::image(i, Access::COLOR_ATTACHMENT_WRITE)).collect();
@@ -210,19 +215,20 @@ impl GBufferPass {
         uses.push(Use::buffer(&mesh.buffer, Access::VERTEX_INDEX_READ));
         uses.push(Use::buffer(&mesh.materials, Access::FRAGMENT_READ));
         uses.push(Use::buffer(&mesh.texels, Access::FRAGMENT_READ));
-        Pass::new("gbuffer", uses, move |cmd| self.record(ctx, cmd, targets, mesh, &constants, &lights))
+        let name = if mirrored { "gbuffer (mirrored)" } else { "gbuffer" };
+        Pass::new(name, uses, move |cmd| self.record(ctx, cmd, targets, mesh, (&constants, mirrored), &lights))
     }
 
-    /// Records the pass: clears the targets and draws `mesh` seen through `camera`, the moving
-    /// light's geometry once per copy in `lights`. The color targets are in `GENERAL` layout
-    /// before and after.
+    /// Records the pass: clears the targets and draws `mesh` seen through `camera` (`mirrored`
+    /// if seen in a mirror), the moving light's geometry once per copy in `lights`. The color
+    /// targets are in `GENERAL` layout before and after.
     pub fn record(
         &self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         targets: &GBufferTargets,
         mesh: &GBufferMesh,
-        camera: &GBufferConstants,
+        (camera, mirrored): (&GBufferConstants, bool),
         lights: &[LightCopy],
     ) {
         let device = &ctx.device;
@@ -257,7 +263,7 @@ impl GBufferPass {
             (placed, true)
         });
         let set = self.set.as_ref().map(|s| s.set);
-        raster::render(ctx, cmd, &info, (self.pipelines[0], self.layout, set), || {
+        raster::render(ctx, cmd, &info, (self.pipelines[0], self.layout, set), mirrored, || {
             mesh.bind(ctx, cmd);
             let mut textured = false;
             for (constants, moving) in still.chain(copies) {
