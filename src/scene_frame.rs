@@ -4,7 +4,7 @@
 //! and lights become the passes' constants.
 
 use anyhow::Result;
-use rrf_baker::glam::Vec3;
+use rrf_baker::glam::{Mat4, Vec3};
 use rrf_baker::model::Model;
 use rrf_baker::network::{Component, Network};
 use rrf_baker::partition::Region;
@@ -17,7 +17,7 @@ use rrf_renderer::{vk, Context};
 use crate::direct_mode::DirectMode;
 use crate::gpu_scene::{
     analytic_light, gbuffer_constants, gbuffer_mesh, light_copies, moving_light_object, network_lights,
-    network_materials, reflected, surface_materials,
+    network_materials, reflected, screen_area, surface_materials,
 };
 use crate::shaders;
 
@@ -102,14 +102,26 @@ impl SceneFrame {
         })
     }
 
-    /// The passes' constants for a frame of `settings`.
+    /// Whether the scene has planar mirrors, whose reflections frames draw.
+    pub fn has_mirrors(&self) -> bool {
+        !self.mirrors.is_empty()
+    }
+
+    /// The passes' constants for a frame of `settings`: the mirrors among them are those in
+    /// view whose reflecting side the camera is on.
     pub fn constants(&self, settings: &FrameSettings) -> FrameConstants {
         let extent = self.gpu.extent();
         let aspect = extent.width as f32 / extent.height as f32;
         let gbuffer = gbuffer_constants(&settings.view, aspect, self.light_object);
         let in_view = |b: &Aabb| box_in_view(&gbuffer.view_projection, b.min.to_array(), b.max.to_array());
+        let view_projection = Mat4::from_cols_array_2d(&gbuffer.view_projection);
         let mirrors = self.mirrors.iter().filter(|(_, bounds)| in_view(bounds));
-        let mirrors = mirrors.filter_map(|(m, _)| reflected(&settings.view, aspect, self.light_object, m)).collect();
+        let mirrors = mirrors
+            .filter_map(|(m, bounds)| {
+                let area = screen_area(&view_projection, bounds, extent);
+                reflected(&settings.view, aspect, self.light_object, m, area)
+            })
+            .collect();
         FrameConstants {
             gbuffer,
             light_copies: light_copies(self.default_light, &settings.lights),

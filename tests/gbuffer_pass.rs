@@ -27,7 +27,7 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
     let mesh = GBufferMesh::new(&ctx, &vertices, &indices, &materials, &texture_texels).unwrap();
     let pass = GBufferPass::new(&ctx, shaders::GBUFFER_VERT, shaders::GBUFFER_FRAG, &mesh).unwrap();
     ctx.submit_once(|cmd| {
-        pass.record(&ctx, cmd, &targets, &mesh, (&gbuffer_constants(&view, aspect, None), false), &[])
+        pass.record(&ctx, cmd, &targets, &mesh, (&gbuffer_constants(&view, aspect, None), None), &[])
     })
     .unwrap();
     let surface = ctx.read_image(&targets.surface, vk::ImageLayout::GENERAL).unwrap();

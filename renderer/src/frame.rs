@@ -357,7 +357,7 @@ impl Frame {
         extra: Vec<Pass<'a>>,
     ) -> Result<Vec<Pass<'a>>> {
         let copies = constants.light_copies.clone();
-        let mut passes = vec![self.gbuffer.pass(ctx, &self.targets, &self.mesh, constants.gbuffer, copies, false)];
+        let mut passes = vec![self.gbuffer.pass(ctx, &self.targets, &self.mesh, constants.gbuffer, copies, None)];
         let stamp = |passes: &mut Vec<Pass>, index: u32| {
             if let (Some(pool), Some(last)) = (timestamps, passes.last_mut()) {
                 last.timestamp = Some((pool, index));
@@ -498,7 +498,8 @@ impl Reflection {
         frame: &'a NetworkOutputs,
     ) -> Result<Vec<Pass<'a>>> {
         let copies = constants.light_copies.clone();
-        let mut passes = vec![owner.gbuffer.pass(ctx, &self.targets, &owner.mesh, mirror.gbuffer, copies, true)];
+        let mut passes =
+            vec![owner.gbuffer.pass(ctx, &self.targets, &owner.mesh, mirror.gbuffer, copies, Some(mirror.area))];
         let c = constants;
         let network = NetworkConstants::new(mirror.gbuffer.eye, &c.lights, c.exposure_scale, c.shown.code())?;
         passes.extend(self.network.passes(ctx, &self.targets, &owner.mesh, network, None)?);

@@ -102,8 +102,9 @@ impl ViewerGpu {
         if let (Some(stamps), Some(period)) = (stamps, period_ns) {
             stats.add_timestamps(&stamps, period);
         }
-        let grid = state.overlay.then(|| state.overlay_text(stats, &ctx.info.name));
         let constants = frame.constants(&state.settings());
+        let reflected = frame.has_mirrors().then_some(constants.mirrors.len());
+        let grid = state.overlay.then(|| state.overlay_text(stats, &ctx.info.name, reflected));
         let ldr = frame.gpu.ldr();
         let buffer = (!screenshots.is_empty()).then(|| ctx.create_readback_buffer(ldr)).transpose()?;
         let overlay = grid.as_ref().map(|g| (g, overlay_scale));

@@ -335,7 +335,8 @@ impl ViewerState {
     }
 
     /// The overlay's text for the current frame: one dark box of lines of equal width.
-    pub fn overlay_text(&self, stats: &Stats, device: &str) -> TextGrid {
+    /// `reflected`: how many mirrors the frame draws the reflection of, in a scene with mirrors.
+    pub fn overlay_text(&self, stats: &Stats, device: &str, reflected: Option<usize>) -> TextGrid {
         let mut lines: Vec<(String, Colour)> = Vec::new();
         let (fps, frame_ms) = stats.recent_rate();
         lines.push((
@@ -372,9 +373,10 @@ impl ViewerState {
             format!("camera {:.2},{:.2},{:.2}{note}", e.x, e.y, e.z),
             if outside { Colour::Yellow } else { Colour::White },
         ));
+        let mirrors = reflected.map_or(String::new(), |n| format!("  reflections on ({n} in view)"));
         lines.push((
             format!(
-                "showing {}  exposure {:+.1} EV  direct light {}",
+                "showing {}  exposure {:+.1} EV  direct light {}{mirrors}",
                 self.shown.name(),
                 self.exposure,
                 self.direct.name()
@@ -452,7 +454,7 @@ mod tests {
         assert!(s.duplicate_light().is_err());
         s.reset();
         assert_eq!(s.lights, vec![first]);
-        let text = s.overlay_text(&Stats::default(), "test").text();
+        let text = s.overlay_text(&Stats::default(), "test", None).text();
         assert!(text.contains("light 1/1 at"), "{text}");
     }
 
@@ -464,7 +466,7 @@ mod tests {
         let note = s.light_note.clone().unwrap();
         assert!(note.contains("Screen"), "{note}");
         assert!(s.scale_intensity(2.0).is_err() && s.next_colour().is_err());
-        assert!(s.overlay_text(&Stats::default(), "test").text().contains(&note));
+        assert!(s.overlay_text(&Stats::default(), "test", None).text().contains(&note));
     }
 
     #[test]
@@ -477,6 +479,13 @@ mod tests {
     }
 
     #[test]
+    fn the_overlay_says_when_reflections_are_on() {
+        let s = state();
+        assert!(!s.overlay_text(&Stats::default(), "test", None).text().contains("reflections"));
+        assert!(s.overlay_text(&Stats::default(), "test", Some(1)).text().contains("reflections on (1 in view)"));
+    }
+
+    #[test]
     fn the_light_stays_in_its_box_and_says_so_at_the_edge() {
         let mut s = state();
         let b = s.light_box.unwrap();
@@ -486,7 +495,7 @@ mod tests {
         }
         assert!(b.contains(s.light().position));
         assert!((s.light().position.y - b.max.y).abs() < 1e-6 && s.light_at_edge);
-        assert!(s.overlay_text(&Stats::default(), "test").text().contains("edge of its trained box"));
+        assert!(s.overlay_text(&Stats::default(), "test", None).text().contains("edge of its trained box"));
         s.reset();
         assert!(!s.light_at_edge || b.contains(s.light().position));
     }

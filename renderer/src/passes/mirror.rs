@@ -24,6 +24,8 @@ pub struct Reflected {
     /// reflected in its plane, with its near plane on the mirror, and the camera's reflection
     /// as the eye.
     pub gbuffer: GBufferConstants,
+    /// The pixels the mirror may cover: the reflection is drawn only there.
+    pub area: vk::Rect2D,
 }
 
 #[repr(C)]

@@ -15,7 +15,7 @@ pub fn build() -> (GltfBuilder, String) {
     let grey = b.material(MaterialDesc::diffuse("grey", [0.45, 0.45, 0.45]));
     let gold = b.material(MaterialDesc::glossy("rough gold", [1.0, 0.77, 0.34], 1.0, 0.35));
     let aluminium = b.material(MaterialDesc::glossy("brushed aluminium", [0.91, 0.92, 0.92], 1.0, 0.3));
-    let mirror = b.material(MaterialDesc::glossy("mirror", [0.95, 0.95, 0.95], 1.0, 0.1));
+    let mirror = b.material(MaterialDesc::glossy("mirror", [0.95, 0.95, 0.95], 1.0, 0.0));
     let plastic = b.material(MaterialDesc::glossy("red plastic", [0.7, 0.08, 0.06], 0.0, 0.4));
     let light = b.material(MaterialDesc::emissive("light", [40.0, 36.0, 30.0]));
 

@@ -198,8 +198,9 @@ impl GBufferPass {
         Ok(pass.keep())
     }
 
-    /// The pass for a frame list: it writes every target and reads the mesh. `mirrored`: the
-    /// constants view the scene in a mirror (their view-projection reflects it).
+    /// The pass for a frame list: it writes every target and reads the mesh. `mirror`: the
+    /// constants view the scene in a mirror (their view-projection reflects it), drawn only
+    /// within this area (the rest of the targets is cleared).
     pub fn pass<'a>(
         &'a self,
         ctx: &'a Context,
@@ -207,7 +208,7 @@ impl GBufferPass {
         mesh: &'a GBufferMesh,
         constants: GBufferConstants,
         lights: Vec<LightCopy>,
-        mirrored: bool,
+        mirror: Option<vk::Rect2D>,
     ) -> Pass<'a> {
         let mut uses: Vec<Use> =
             targets.colors().iter().map(|i| Use::image(i, Access::COLOR_ATTACHMENT_WRITE)).collect();
@@ -215,20 +216,20 @@ impl GBufferPass {
         uses.push(Use::buffer(&mesh.buffer, Access::VERTEX_INDEX_READ));
         uses.push(Use::buffer(&mesh.materials, Access::FRAGMENT_READ));
         uses.push(Use::buffer(&mesh.texels, Access::FRAGMENT_READ));
-        let name = if mirrored { "gbuffer (mirrored)" } else { "gbuffer" };
-        Pass::new(name, uses, move |cmd| self.record(ctx, cmd, targets, mesh, (&constants, mirrored), &lights))
+        let name = if mirror.is_some() { "gbuffer (mirrored)" } else { "gbuffer" };
+        Pass::new(name, uses, move |cmd| self.record(ctx, cmd, targets, mesh, (&constants, mirror), &lights))
     }
 
-    /// Records the pass: clears the targets and draws `mesh` seen through `camera` (`mirrored`
-    /// if seen in a mirror), the moving light's geometry once per copy in `lights`. The color
-    /// targets are in `GENERAL` layout before and after.
+    /// Records the pass: clears the targets and draws `mesh` seen through `camera` (seen in a
+    /// mirror and drawn only within `mirror`'s area, if given), the moving light's geometry
+    /// once per copy in `lights`. The color targets are in `GENERAL` layout before and after.
     pub fn record(
         &self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
         targets: &GBufferTargets,
         mesh: &GBufferMesh,
-        (camera, mirrored): (&GBufferConstants, bool),
+        (camera, mirror): (&GBufferConstants, Option<vk::Rect2D>),
         lights: &[LightCopy],
     ) {
         let device = &ctx.device;
@@ -263,7 +264,11 @@ impl GBufferPass {
             (placed, true)
         });
         let set = self.set.as_ref().map(|s| s.set);
-        raster::render(ctx, cmd, &info, (self.pipelines[0], self.layout, set), mirrored, || {
+        raster::render(ctx, cmd, &info, (self.pipelines[0], self.layout, set), mirror.is_some(), || {
+            if let Some(area) = mirror {
+                // SAFETY: `cmd` is recording inside this pass's rendering; the scissor is dynamic.
+                unsafe { device.cmd_set_scissor(cmd, 0, &[area]) };
+            }
             mesh.bind(ctx, cmd);
             let mut textured = false;
             for (constants, moving) in still.chain(copies) {
