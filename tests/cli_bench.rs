@@ -46,30 +46,37 @@ fn bench_prints_the_figures() {
     // falls back to them too.
     assert_eq!(bytes["tiled display"], bytes["tiled radiance"], "blended units fall back to radiance: {bytes:?}");
 
-    // A model with hard cuts (the glossy room's, its blend band set to 0): the display frame
-    // writes one RGBA8 image instead of three RGBA32F ones and a tonemap.
-    let mut hard =
-        Model::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/glossy-room/model.safetensors"), None).unwrap();
-    hard.metadata.blend_band = 0.0;
-    let dir = std::env::temp_dir().join(format!("rrf-bench-hard-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let hard_path = dir.join("hard.safetensors");
-    hard.save(&hard_path).unwrap();
-    #[rustfmt::skip]
-    let out = rrf(
-        &["bench", "scenes/glossy-room", "--model", hard_path.to_str().unwrap(), "--size", "32x32", "--frames", "2",
-          "--json", "--variant", "tiled"],
-        &[],
-    );
-    std::fs::remove_dir_all(&dir).unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let rows: Vec<serde_json::Value> =
-        String::from_utf8(out.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
-    let bytes = |output: &str| {
-        let row = rows.iter().find(|r| r["output"] == output).unwrap();
-        row["bytes_per_pixel"].as_u64().unwrap()
+    // Models with hard cuts (their blend band set to 0): the dining room's display frame writes
+    // one RGBA8 image instead of three RGBA32F ones and a tonemap; the glossy room's mirror adds
+    // to the radiance images, so its display frame falls back to them.
+    let display_and_radiance = |scene: &str| {
+        let mut hard =
+            Model::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(scene).join("model.safetensors"), None).unwrap();
+        hard.metadata.blend_band = 0.0;
+        let dir = std::env::temp_dir().join(format!("rrf-bench-hard-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let hard_path = dir.join("hard.safetensors");
+        hard.save(&hard_path).unwrap();
+        #[rustfmt::skip]
+        let out = rrf(
+            &["bench", scene, "--model", hard_path.to_str().unwrap(), "--size", "32x32", "--frames", "2", "--json",
+              "--variant", "tiled"],
+            &[],
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let rows: Vec<serde_json::Value> =
+            String::from_utf8(out.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+        let bytes = |output: &str| {
+            let row = rows.iter().find(|r| r["output"] == output).unwrap();
+            row["bytes_per_pixel"].as_u64().unwrap()
+        };
+        (bytes("display"), bytes("radiance"))
     };
-    assert!(bytes("display") < bytes("radiance"), "{rows:?}");
+    let (display, radiance) = display_and_radiance("scenes/many-objects");
+    assert!(display < radiance, "many-objects: display {display} bytes, radiance {radiance}");
+    let (display, radiance) = display_and_radiance("scenes/glossy-room");
+    assert_eq!(display, radiance, "a scene with a mirror falls back to radiance");
 }
 
 #[test]
