@@ -75,3 +75,21 @@ fn gallery_materials_say_what_was_read() {
     assert_eq!(features("screen"), ["emissive texture", "double-sided", "emits [3.0, 3.0, 3.0]"]);
     assert!(features("plaster").is_empty());
 }
+
+#[test]
+fn the_glossy_rooms_panel_is_its_only_mirror() {
+    let out = rrf(&["info", "scenes/glossy-room", "--json"], &[]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let mirrors: Vec<&str> = v["object_list"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|o| o["mirror"] == true)
+        .map(|o| o["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(mirrors, ["MirrorPanel"]);
+    let text = rrf(&["info", "scenes/glossy-room"], &[]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("MirrorPanel"));
+    assert!(String::from_utf8_lossy(&text.stdout).contains("(planar mirror: reflects, has no networks)"));
+}

@@ -95,6 +95,7 @@ fn scene_info(path: &Path, json: bool) -> Result<()> {
             "content_hash": format!("{:016x}", scene.content_hash),
             "object_list": scene.objects.iter().map(|o| json!({
                 "id": o.id, "name": o.name, "triangles": o.triangles.len(), "materials": material_names(o),
+                "mirror": scene.is_mirror(o.id),
             })).collect::<Vec<_>>(),
             "material_list": scene.materials.iter().map(|m| json!({
                 "name": m.name, "features": material_features(m),
@@ -119,7 +120,8 @@ fn scene_info(path: &Path, json: bool) -> Result<()> {
     println!("model      {}{}", model.display(), state(&model, "not baked yet: `rrf bake`"));
     println!("\n  id  object                 triangles  materials");
     for o in &scene.objects {
-        println!("{:>4}  {:<22} {:>9}  {}", o.id, o.name, o.triangles.len(), material_names(o).join(", "));
+        let mirror = if scene.is_mirror(o.id) { " (planar mirror: reflects, has no networks)" } else { "" };
+        println!("{:>4}  {:<22} {:>9}  {}{mirror}", o.id, o.name, o.triangles.len(), material_names(o).join(", "));
     }
     println!("\n  material               what rrf reads besides its factors");
     for m in &scene.materials {
