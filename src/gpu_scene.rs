@@ -1,8 +1,8 @@
 //! What the renderer gets from a scene: flat G-buffer vertices and per-frame constants. The
 //! camera matches the path tracer's ([`rrf_baker::trace::Camera`]) pixel for pixel.
 
-use rrf_baker::glam::{Mat4, Vec2, Vec3, Vec4};
-use rrf_baker::scene::{self, Aabb, AlphaMode, ColorSpace, LightKind, Mirror, PlacedLight, Scene, View};
+use rrf_baker::glam::{Mat4, Vec3, Vec4};
+use rrf_baker::scene::{self, AlphaMode, ColorSpace, LightKind, Mirror, PlacedLight, Scene, View};
 use rrf_renderer::lights::{NetworkLight, PointLightShape, Spot};
 use rrf_renderer::passes::gbuffer::{GBufferConstants, LightCopy};
 use rrf_renderer::passes::mesh::{GBufferVertex, SurfaceMaterial, TextureRef};
@@ -224,28 +224,4 @@ pub fn reflected(
         },
         area,
     })
-}
-
-/// The pixels of a frame of `extent` seen through `view_projection` where `bounds` may show:
-/// the rectangle around its corners' projections, a pixel wider each way, or the whole frame
-/// when a corner is behind the camera.
-pub fn screen_area(view_projection: &Mat4, bounds: &Aabb, extent: vk::Extent2D) -> vk::Rect2D {
-    let whole = vk::Rect2D { offset: vk::Offset2D::default(), extent };
-    let size = Vec2::new(extent.width as f32, extent.height as f32);
-    let (mut min, mut max) = (Vec2::INFINITY, Vec2::NEG_INFINITY);
-    for corner in 0..8 {
-        let pick = |axis: usize| if corner & (1 << axis) == 0 { bounds.min[axis] } else { bounds.max[axis] };
-        let clip = *view_projection * Vec4::new(pick(0), pick(1), pick(2), 1.0);
-        if clip.w <= 0.0 {
-            return whole;
-        }
-        let pixel = (clip.truncate().truncate() / clip.w * 0.5 + 0.5) * size;
-        (min, max) = (min.min(pixel), max.max(pixel));
-    }
-    let min = (min - 1.0).floor().clamp(Vec2::ZERO, size);
-    let max = (max + 1.0).ceil().clamp(Vec2::ZERO, size);
-    vk::Rect2D {
-        offset: vk::Offset2D { x: min.x as i32, y: min.y as i32 },
-        extent: vk::Extent2D { width: (max.x - min.x) as u32, height: (max.y - min.y) as u32 },
-    }
 }

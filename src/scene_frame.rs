@@ -4,20 +4,20 @@
 //! and lights become the passes' constants.
 
 use anyhow::Result;
-use rrf_baker::glam::{Mat4, Vec3};
+use rrf_baker::glam::Vec3;
 use rrf_baker::model::Model;
 use rrf_baker::network::{Component, Network};
 use rrf_baker::partition::Region;
 use rrf_baker::scene::{Aabb, Mirror, PlacedLight, Scene, View};
 use rrf_renderer::frame::{Frame, FrameConstants, FrameOutput, FramePixels, FrameScene, FrameShaders, Shown};
-use rrf_renderer::passes::gbuffer::box_in_view;
+use rrf_renderer::passes::gbuffer::{box_in_view, box_on_screen};
 use rrf_renderer::passes::network::{LeafBlend, NetworkShaders, NetworkUnit, NetworkWeights, Variant};
 use rrf_renderer::{vk, Context};
 
 use crate::direct_mode::DirectMode;
 use crate::gpu_scene::{
     analytic_light, gbuffer_constants, gbuffer_mesh, light_copies, moving_light_object, network_lights,
-    network_materials, reflected, screen_area, surface_materials,
+    network_materials, reflected, surface_materials,
 };
 use crate::shaders;
 
@@ -83,6 +83,7 @@ impl SceneFrame {
             DirectMode::Auto | DirectMode::Learned => None,
             DirectMode::Analytic => Some(analytic_light(scene)?),
         };
+        let mirrors = scene.mirrors();
         let frame_scene = FrameScene {
             vertices: &vertices,
             indices: &indices,
@@ -92,13 +93,13 @@ impl SceneFrame {
             materials: &network_materials(scene),
             units: &units,
             analytic_light,
-            mirrors: !scene.mirrors().is_empty(),
+            mirrors: !mirrors.is_empty(),
         };
         Ok(SceneFrame {
             gpu: Frame::new(ctx, &FRAME_SHADERS, &frame_scene, variant, extent, output)?,
             default_light: scene.default_light().position,
             light_object: moving_light_object(scene),
-            mirrors: scene.mirrors().into_iter().map(|m| (m, scene.objects[m.object as usize].bounds())).collect(),
+            mirrors: mirrors.into_iter().map(|m| (m, scene.objects[m.object as usize].bounds())).collect(),
         })
     }
 
@@ -113,13 +114,12 @@ impl SceneFrame {
         let extent = self.gpu.extent();
         let aspect = extent.width as f32 / extent.height as f32;
         let gbuffer = gbuffer_constants(&settings.view, aspect, self.light_object);
-        let in_view = |b: &Aabb| box_in_view(&gbuffer.view_projection, b.min.to_array(), b.max.to_array());
-        let view_projection = Mat4::from_cols_array_2d(&gbuffer.view_projection);
-        let mirrors = self.mirrors.iter().filter(|(_, bounds)| in_view(bounds));
+        let m = &gbuffer.view_projection;
+        let mirrors = self.mirrors.iter().filter(|(_, b)| box_in_view(m, b.min.to_array(), b.max.to_array()));
         let mirrors = mirrors
-            .filter_map(|(m, bounds)| {
-                let area = screen_area(&view_projection, bounds, extent);
-                reflected(&settings.view, aspect, self.light_object, m, area)
+            .filter_map(|(mirror, b)| {
+                let area = box_on_screen(m, b.min.to_array(), b.max.to_array(), extent);
+                reflected(&settings.view, aspect, self.light_object, mirror, area)
             })
             .collect();
         FrameConstants {

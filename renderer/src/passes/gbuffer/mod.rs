@@ -128,16 +128,44 @@ impl Draw {
 /// plane of the clip volume.
 pub fn box_in_view(m: &[[f32; 4]; 4], min: [f32; 3], max: [f32; 3]) -> bool {
     let mut outside = [true; 6];
-    for corner in 0..8 {
-        let pick = |axis: usize| if corner & (1 << axis) == 0 { min[axis] } else { max[axis] };
-        let p = [pick(0), pick(1), pick(2), 1.0];
-        let clip: [f32; 4] = std::array::from_fn(|row| (0..4).map(|col| m[col][row] * p[col]).sum());
-        let (x, y, z, w) = (clip[0], clip[1], clip[2], clip[3]);
+    for [x, y, z, w] in clip_corners(m, min, max) {
         for (plane, beyond) in [x > w, x < -w, y > w, y < -w, z < 0.0, z > w].into_iter().enumerate() {
             outside[plane] &= beyond;
         }
     }
     !outside.contains(&true)
+}
+
+/// The pixels of a frame of `extent` where the box from `min` to `max` may show through the
+/// view-projection `m`: the rectangle around its corners' projections, a pixel wider each way,
+/// or the whole frame when a corner is behind the camera.
+pub fn box_on_screen(m: &[[f32; 4]; 4], min: [f32; 3], max: [f32; 3], extent: vk::Extent2D) -> vk::Rect2D {
+    let size = [extent.width as f32, extent.height as f32];
+    let (mut low, mut high) = ([f32::INFINITY; 2], [f32::NEG_INFINITY; 2]);
+    for [x, y, _, w] in clip_corners(m, min, max) {
+        if w <= 0.0 {
+            return vk::Rect2D { offset: vk::Offset2D::default(), extent };
+        }
+        for (axis, v) in [x, y].into_iter().enumerate() {
+            let pixel = (v / w * 0.5 + 0.5) * size[axis];
+            (low[axis], high[axis]) = (low[axis].min(pixel), high[axis].max(pixel));
+        }
+    }
+    let low = std::array::from_fn::<f32, 2, _>(|a| (low[a] - 1.0).floor().clamp(0.0, size[a]));
+    let high = std::array::from_fn::<f32, 2, _>(|a| (high[a] + 1.0).ceil().clamp(0.0, size[a]));
+    vk::Rect2D {
+        offset: vk::Offset2D { x: low[0] as i32, y: low[1] as i32 },
+        extent: vk::Extent2D { width: (high[0] - low[0]) as u32, height: (high[1] - low[1]) as u32 },
+    }
+}
+
+/// The eight corners of the box from `min` to `max` in the clip space of `m` (column-major).
+fn clip_corners(m: &[[f32; 4]; 4], min: [f32; 3], max: [f32; 3]) -> [[f32; 4]; 8] {
+    std::array::from_fn(|corner| {
+        let pick = |axis: usize| if corner & (1 << axis) == 0 { min[axis] } else { max[axis] };
+        let p = [pick(0), pick(1), pick(2), 1.0];
+        std::array::from_fn(|row| (0..4).map(|col| m[col][row] * p[col]).sum())
+    })
 }
 
 pub struct GBufferPass {
