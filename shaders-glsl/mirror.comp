@@ -29,10 +29,12 @@ layout(push_constant) uniform Params {
     vec4 normal;
     // The mirror's object id + 1, as the G-buffer holds it.
     uint object;
+    // The first pixel dispatched.
+    uvec2 origin;
 } params;
 
 void main() {
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    ivec2 pixel = ivec2(params.origin + gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, imageSize(out_gi))) || id_object(imageLoad(ids, pixel).x) != params.object) {
         return;
     }

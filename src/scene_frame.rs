@@ -36,6 +36,7 @@ const FRAME_SHADERS: FrameShaders<'static> = FrameShaders {
     shadow_fragment: shaders::SHADOW_FRAG,
     tonemap: shaders::TONEMAP_COMP,
     mirror: shaders::MIRROR_COMP,
+    mirror_mask: shaders::MIRROR_MASK_COMP,
     overlay: shaders::OVERLAY_COMP,
     font: &font8x8::legacy::BASIC_LEGACY,
 };

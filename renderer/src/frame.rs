@@ -25,7 +25,7 @@ use crate::error::{Error, Result};
 use crate::lights::NetworkLight;
 use crate::passes::gbuffer::{GBufferConstants, GBufferPass, GBufferTargets, GBufferTexel, LightCopy};
 use crate::passes::mesh::{GBufferMesh, GBufferVertex, SurfaceMaterial};
-use crate::passes::mirror::{MirrorPass, Reflected};
+use crate::passes::mirror::{MirrorImages, MirrorPass, Reflected};
 use crate::passes::network::{
     DirectLight, NetworkConstants, NetworkOutputs, NetworkPass, NetworkShaders, NetworkUnit, Variant,
 };
@@ -87,6 +87,7 @@ pub struct FrameShaders<'a> {
     pub shadow_fragment: &'a [u32],
     pub tonemap: &'a [u32],
     pub mirror: &'a [u32],
+    pub mirror_mask: &'a [u32],
     pub overlay: &'a [u32],
     /// 8×8 glyphs of ASCII, one byte per row.
     pub font: &'a [[u8; 8]; 128],
@@ -197,7 +198,8 @@ impl Frame {
                 let targets_seen = ctx.guard(GBufferTargets::new(ctx, extent)?);
                 let network_seen = ctx.guard(network_pass(&targets_seen, None)?);
                 let seen = network_seen.outputs().expect("a network pass without a display image has outputs");
-                let pass = MirrorPass::new(ctx, shaders.mirror, &targets, seen, frame)?;
+                let images = MirrorImages { gbuffer: &targets, frame, seen_gbuffer: &targets_seen, seen };
+                let pass = MirrorPass::new(ctx, shaders.mirror, shaders.mirror_mask, images)?;
                 Some(Reflection { targets: targets_seen.keep(), network: network_seen.keep(), pass })
             }
             _ => None,
@@ -367,7 +369,7 @@ impl Frame {
         let display = self.network.outputs().is_none().then_some(&self.ldr);
         let c = constants;
         let network = NetworkConstants::new(c.gbuffer.eye, &c.lights, c.exposure_scale, c.shown.code())?;
-        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display)?);
+        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display, None)?);
         if let (Some(r), Some(frame)) = (&self.reflection, self.network.outputs()) {
             for mirror in &constants.mirrors {
                 passes.extend(r.passes(ctx, self, constants, mirror, frame)?);
@@ -483,7 +485,7 @@ impl Reflection {
         self.network.resize(ctx, &targets, None)?;
         std::mem::replace(&mut self.targets, targets.keep()).destroy(ctx);
         let seen = self.network.outputs().expect("the reflection's network pass has outputs");
-        self.pass.rebind(ctx, gbuffer, seen, frame);
+        self.pass.rebind(ctx, MirrorImages { gbuffer, frame, seen_gbuffer: &self.targets, seen });
         Ok(())
     }
 
@@ -497,14 +499,17 @@ impl Reflection {
         mirror: &Reflected,
         frame: &'a NetworkOutputs,
     ) -> Result<Vec<Pass<'a>>> {
+        let seen = self.network.outputs().expect("the reflection's network pass has outputs");
+        let images = MirrorImages { gbuffer: &owner.targets, frame, seen_gbuffer: &self.targets, seen };
         let copies = constants.light_copies.clone();
-        let mut passes =
-            vec![owner.gbuffer.pass(ctx, &self.targets, &owner.mesh, mirror.gbuffer, copies, Some(mirror.area))];
+        let mut passes = vec![
+            owner.gbuffer.pass(ctx, &self.targets, &owner.mesh, mirror.gbuffer, copies, Some(mirror.area)),
+            self.pass.mask_pass(ctx, images, mirror),
+        ];
         let c = constants;
         let network = NetworkConstants::new(mirror.gbuffer.eye, &c.lights, c.exposure_scale, c.shown.code())?;
-        passes.extend(self.network.passes(ctx, &self.targets, &owner.mesh, network, None)?);
-        let seen = self.network.outputs().expect("the reflection's network pass has outputs");
-        passes.push(self.pass.pass(ctx, (&owner.targets, seen, frame), mirror, constants.gbuffer.eye));
+        passes.extend(self.network.passes(ctx, &self.targets, &owner.mesh, network, None, Some(mirror.area))?);
+        passes.push(self.pass.pass(ctx, images, mirror, constants.gbuffer.eye));
         Ok(passes)
     }
 }

@@ -23,6 +23,17 @@ pub enum Dispatch<'a> {
     Indirect { buffer: &'a Buffer, offset: u64 },
 }
 
+/// The block of whole `tile` × `tile` tiles that covers `area`: its first pixel, which the
+/// shader adds to `gl_GlobalInvocationID`, and its size, to dispatch [`Dispatch::Covering`].
+/// (`vkCmdDispatchBase` would do the same, but lavapipe of Mesa 22.3 draws the wrong tiles
+/// with it.)
+pub fn tile_block(area: vk::Rect2D, tile: u32) -> ([u32; 2], vk::Extent2D) {
+    let (x, y) = (area.offset.x.max(0) as u32, area.offset.y.max(0) as u32);
+    let first = [x / tile * tile, y / tile * tile];
+    let extent = vk::Extent2D { width: x + area.extent.width - first[0], height: y + area.extent.height - first[1] };
+    (first, extent)
+}
+
 pub struct ComputePass {
     pipelines: Vec<vk::Pipeline>,
     pub layout: vk::PipelineLayout,

@@ -227,8 +227,8 @@ impl GBufferPass {
     }
 
     /// The pass for a frame list: it writes every target and reads the mesh. `mirror`: the
-    /// constants view the scene in a mirror (their view-projection reflects it), drawn only
-    /// within this area (the rest of the targets is cleared).
+    /// constants view the scene in a mirror (their view-projection reflects it), drawn and
+    /// cleared only within this area (the rest of the targets keeps what it held).
     pub fn pass<'a>(
         &'a self,
         ctx: &'a Context,
@@ -275,7 +275,8 @@ impl GBufferPass {
             })
             .collect();
         let depth = cleared_depth(&targets.depth);
-        let area = vk::Rect2D { offset: vk::Offset2D::default(), extent: targets.extent };
+        let whole = vk::Rect2D { offset: vk::Offset2D::default(), extent: targets.extent };
+        let area = mirror.unwrap_or(whole);
         let info = vk::RenderingInfo::default()
             .render_area(area)
             .layer_count(1)
@@ -294,6 +295,8 @@ impl GBufferPass {
         let set = self.set.as_ref().map(|s| s.set);
         raster::render(ctx, cmd, &info, (self.pipelines[0], self.layout, set), mirror.is_some(), || {
             if let Some(area) = mirror {
+                // The render area is the mirror's; the view is still the whole frame's.
+                raster::set_viewport(ctx, cmd, whole);
                 // SAFETY: `cmd` is recording inside this pass's rendering; the scissor is dynamic.
                 unsafe { device.cmd_set_scissor(cmd, 0, &[area]) };
             }

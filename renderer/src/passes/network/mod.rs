@@ -342,7 +342,8 @@ impl NetworkPass {
 
     /// The pass's steps for a frame list. The G-buffer (and for a display pass, `display`)
     /// must be the ones the pass was made or last resized for; `mesh` is the scene the
-    /// G-buffer drew, which analytic direct light draws into its shadow maps.
+    /// G-buffer drew, which analytic direct light draws into its shadow maps. With `area`, only
+    /// the pixels of the 8×8 tiles that it touches are written; the rest keep what they held.
     pub fn passes<'a>(
         &'a self,
         ctx: &'a Context,
@@ -350,6 +351,7 @@ impl NetworkPass {
         mesh: &'a GBufferMesh,
         c: NetworkConstants,
         display: Option<&'a Image>,
+        area: Option<vk::Rect2D>,
     ) -> Result<Vec<Pass<'a>>> {
         let writes: Vec<Use> = Written::of(&self.outputs, display)?
             .images()
@@ -361,10 +363,11 @@ impl NetworkPass {
             // of 4 and under vkCmdUpdateBuffer's 64 KiB.
             unsafe { ctx.device.cmd_update_buffer(cmd, self.lights.raw, 0, bytemuck::cast_slice(c.lights())) };
         });
+        let whole = vk::Rect2D { offset: vk::Offset2D::default(), extent: self.extent };
         let frame = FrameUses {
             ctx,
             gbuffer,
-            extent: self.extent,
+            area: area.unwrap_or(whole),
             constants: c,
             objects: self.objects,
             materials: Use::buffer(&self.materials, Access::COMPUTE_READ),
@@ -411,7 +414,8 @@ struct Shared<'a> {
 struct FrameUses<'a> {
     ctx: &'a Context,
     gbuffer: &'a GBufferTargets,
-    extent: vk::Extent2D,
+    /// The pixels to shade.
+    area: vk::Rect2D,
     constants: NetworkConstants,
     objects: u32,
     materials: Use,

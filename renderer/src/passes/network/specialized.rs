@@ -9,7 +9,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::units::{specializations, NetworkUnit};
 use super::{network_bindings, DirectLight, FrameUses, NetworkConstants, NetworkShaders, Shared, Written, TILE};
-use crate::backend::compute::{Bind, ComputePass, Dispatch, Specialization};
+use crate::backend::compute::{tile_block, Bind, ComputePass, Dispatch, Specialization};
 use crate::backend::context::Context;
 use crate::backend::guard::Destroy;
 use crate::backend::resources::{Buffer, Image};
@@ -64,7 +64,8 @@ struct SpecializedPush {
     light_intensity: [f32; 4],
     spot_axis: [f32; 4],
     spot_cos_outer: f32,
-    pad: [u32; 3],
+    pad: u32,
+    origin: [u32; 2],
 }
 
 #[repr(C)]
@@ -75,6 +76,8 @@ struct ClassifyPush {
     tile_capacity: u32,
     exposure_scale: f32,
     shown: u32,
+    pad: u32,
+    origin: [u32; 2],
 }
 
 /// The specialized variants' pipelines: the tile classification, then two per unit.
@@ -248,7 +251,7 @@ impl Specialized {
     /// in a pass of their own, as they add to what the units before them wrote.
     pub(super) fn passes<'a>(&'a self, frame: FrameUses<'a>, mesh: &'a GBufferMesh) -> Vec<Pass<'a>> {
         let g = frame.gbuffer_reads();
-        let FrameUses { ctx, gbuffer, extent, constants: c, objects, materials, lights, units, writes } = frame;
+        let FrameUses { ctx, gbuffer, area, constants: c, objects, materials, lights, units, writes } = frame;
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let mut passes = Vec::new();
         if !self.dispatch_reset.is_empty() {
@@ -283,15 +286,18 @@ impl Specialized {
             Use::buffer(&self.tiles, Access::COMPUTE_WRITE),
         ];
         uses.extend(writes.iter().copied());
+        let (origin, block) = tile_block(area, TILE);
         let push = ClassifyPush {
             objects,
             units: self.unit_count,
             tile_capacity: self.tile_capacity,
             exposure_scale: c.exposure_scale,
             shown: c.shown,
+            pad: 0,
+            origin,
         };
         passes.push(Pass::new("network tile classification", uses, move |cmd| {
-            self.classify.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
+            self.classify.record(ctx, cmd, bytemuck::bytes_of(&push), block.width, block.height)
         }));
         let mut uses = g;
         uses.extend([materials, lights, units, Use::buffer(&self.tiles, Access::COMPUTE_READ)]);
@@ -302,16 +308,17 @@ impl Specialized {
         // Blending units read what the units before them wrote.
         let written = if self.blended { Access::COMPUTE_READ_WRITE } else { Access::COMPUTE_WRITE };
         uses.extend(writes.iter().map(|w| Use { access: written, ..*w }));
-        let push = self.push(&c);
+        let (origin, block) = tile_block(area, TILE);
+        let push = self.push(&c, origin);
         if self.blended {
             for unit in 0..self.unit_count as usize {
                 passes.push(Pass::new("network unit (blended)", uses.clone(), move |cmd| {
-                    self.record_unit(ctx, cmd, extent, &c, &push, unit)
+                    self.record_unit(ctx, cmd, block, &c, &push, unit)
                 }));
             }
         } else {
             passes.push(Pass::new("network (specialization constants)", uses, move |cmd| {
-                (0..self.unit_count as usize).for_each(|unit| self.record_unit(ctx, cmd, extent, &c, &push, unit))
+                (0..self.unit_count as usize).for_each(|unit| self.record_unit(ctx, cmd, block, &c, &push, unit))
             }));
         }
         passes
@@ -354,8 +361,9 @@ impl Specialized {
         specialized_bindings(gbuffer, shared, &self.tiles, written, &self.direct)
     }
 
-    /// The networks' push constants for a frame with constants `c`.
-    fn push(&self, c: &NetworkConstants) -> SpecializedPush {
+    /// The networks' push constants for a frame with constants `c`, dispatched (if not tiled)
+    /// over the tiles from pixel `origin`.
+    fn push(&self, c: &NetworkConstants, origin: [u32; 2]) -> SpecializedPush {
         let (intensity, spot) = match &self.direct {
             Direct::Analytic { light, .. } => (light.intensity, light.spot),
             Direct::Learned { .. } => ([0.0; 3], None),
@@ -370,17 +378,19 @@ impl Specialized {
             light_intensity: [intensity[0], intensity[1], intensity[2], 0.0],
             spot_axis: [spot.axis[0], spot.axis[1], spot.axis[2], spot.cos_inner],
             spot_cos_outer: spot.cos_outer,
-            pad: [0; 3],
+            pad: 0,
+            origin,
         }
     }
 
-    /// Unit `index`'s dispatch: over its tiles (tiled) or the whole image. Without blending it
+    /// Unit `index`'s dispatch: over its tiles (tiled) or the `block` of tiles from the push
+    /// constants' origin. Without blending it
     /// writes only its own unit's pixels; with blending, it adds to the units before it.
     fn record_unit(
         &self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
-        extent: vk::Extent2D,
+        block: vk::Extent2D,
         c: &NetworkConstants,
         push: &SpecializedPush,
         index: usize,
@@ -389,7 +399,7 @@ impl Specialized {
         let dispatch = if self.tiled {
             Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * index as u64 }
         } else {
-            Dispatch::Covering { width: extent.width, height: extent.height }
+            Dispatch::Covering { width: block.width, height: block.height }
         };
         self.networks.record_pipeline(ctx, cmd, 2 * index + several, bytemuck::bytes_of(push), dispatch);
     }
