@@ -222,3 +222,24 @@ unsafe fn create_pipelines(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rect(x: i32, y: i32, width: u32, height: u32) -> vk::Rect2D {
+        vk::Rect2D { offset: vk::Offset2D { x, y }, extent: vk::Extent2D { width, height } }
+    }
+
+    #[test]
+    fn a_tile_block_starts_on_a_tile_and_covers_the_area() {
+        // Pixels 13..=42 across, 3..=4 down: tiles from 8 and 0, through pixel 42 and 4.
+        let (origin, extent) = tile_block(rect(13, 3, 30, 2), 8);
+        assert_eq!(origin, [8, 0]);
+        assert_eq!((extent.width, extent.height), (35, 5));
+        assert_eq!(extent.width.div_ceil(8), 5, "tiles 1 to 5 across");
+        // An aligned area is its own block.
+        let (origin, extent) = tile_block(rect(16, 8, 16, 8), 8);
+        assert_eq!((origin, extent.width, extent.height), ([16, 8], 16, 8));
+    }
+}
