@@ -1,5 +1,5 @@
 //! A closed room of glossy interreflections, after the first figure of the RRF paper: a
-//! glossy floor, rough metal objects, a near-mirror panel, coloured walls, a moving area light.
+//! glossy floor, rough metal objects, a planar mirror panel, coloured walls, a moving area light.
 
 use glam::{Vec2, Vec3};
 
@@ -33,7 +33,7 @@ pub fn build() -> (GltfBuilder, String) {
     b.object("GoldSphere", &sphere(v(-0.8, 0.55, -0.7), 0.55, 64, 32), gold, Vec3::ZERO);
     b.object("MetalBlock", &cuboid(v(0.45, 0.0, -1.5), v(1.25, 0.8, -0.7)), aluminium, Vec3::ZERO);
     b.object("PlasticSphere", &sphere(v(0.5, 0.35, 0.4), 0.35, 48, 24), plastic, Vec3::ZERO);
-    // A near-mirror panel hanging on the back wall, 2 cm in front of it.
+    // A mirror panel (metallic 1, roughness 0) hanging on the back wall, 2 cm in front of it.
     let panel =
         quad([v(-1.0, 0.9, -2.48), v(1.0, 0.9, -2.48), v(1.0, 2.3, -2.48), v(-1.0, 2.3, -2.48)], Vec3::Z, Vec2::ONE);
     b.object("MirrorPanel", &panel, mirror, Vec3::ZERO);
