@@ -484,9 +484,15 @@ impl Reflection {
         let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
         self.network.resize(ctx, &targets, None)?;
         std::mem::replace(&mut self.targets, targets.keep()).destroy(ctx);
-        let seen = self.network.outputs().expect("the reflection's network pass has outputs");
-        self.pass.rebind(ctx, MirrorImages { gbuffer, frame, seen_gbuffer: &self.targets, seen });
+        self.pass.rebind(ctx, self.images(gbuffer, frame));
         Ok(())
+    }
+
+    /// What the mirror passes read and write: the frame's `gbuffer` and radiance `frame`, and
+    /// this reflection's own.
+    fn images<'a>(&'a self, gbuffer: &'a GBufferTargets, frame: &'a NetworkOutputs) -> MirrorImages<'a> {
+        let seen = self.network.outputs().expect("the reflection's network pass has outputs");
+        MirrorImages { gbuffer, frame, seen_gbuffer: &self.targets, seen }
     }
 
     /// The passes that add what `mirror` reflects to the radiance images `frame` of the frame
@@ -499,8 +505,7 @@ impl Reflection {
         mirror: &Reflected,
         frame: &'a NetworkOutputs,
     ) -> Result<Vec<Pass<'a>>> {
-        let seen = self.network.outputs().expect("the reflection's network pass has outputs");
-        let images = MirrorImages { gbuffer: &owner.targets, frame, seen_gbuffer: &self.targets, seen };
+        let images = self.images(&owner.targets, frame);
         let copies = constants.light_copies.clone();
         let mut passes = vec![
             owner.gbuffer.pass(ctx, &self.targets, &owner.mesh, mirror.gbuffer, copies, Some(mirror.area)),

@@ -27,7 +27,7 @@ mod weights;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use crate::backend::compute::Bind;
+use crate::backend::compute::{tile_block, Bind};
 use crate::backend::context::Context;
 use crate::backend::guard::Destroy;
 use crate::backend::resources::{Buffer, Image};
@@ -364,10 +364,12 @@ impl NetworkPass {
             unsafe { ctx.device.cmd_update_buffer(cmd, self.lights.raw, 0, bytemuck::cast_slice(c.lights())) };
         });
         let whole = vk::Rect2D { offset: vk::Offset2D::default(), extent: self.extent };
+        let (origin, block) = tile_block(area.unwrap_or(whole), TILE);
         let frame = FrameUses {
             ctx,
             gbuffer,
-            area: area.unwrap_or(whole),
+            origin,
+            block,
             constants: c,
             objects: self.objects,
             materials: Use::buffer(&self.materials, Access::COMPUTE_READ),
@@ -414,8 +416,10 @@ struct Shared<'a> {
 struct FrameUses<'a> {
     ctx: &'a Context,
     gbuffer: &'a GBufferTargets,
-    /// The pixels to shade.
-    area: vk::Rect2D,
+    /// The tiles to shade: the first pixel of the first, and the size of the block of them
+    /// ([`tile_block`]).
+    origin: [u32; 2],
+    block: vk::Extent2D,
     constants: NetworkConstants,
     objects: u32,
     materials: Use,

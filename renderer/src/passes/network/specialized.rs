@@ -9,7 +9,7 @@ use gpu_allocator::MemoryLocation;
 
 use super::units::{specializations, NetworkUnit};
 use super::{network_bindings, DirectLight, FrameUses, NetworkConstants, NetworkShaders, Shared, Written, TILE};
-use crate::backend::compute::{tile_block, Bind, ComputePass, Dispatch, Specialization};
+use crate::backend::compute::{Bind, ComputePass, Dispatch, Specialization};
 use crate::backend::context::Context;
 use crate::backend::guard::Destroy;
 use crate::backend::resources::{Buffer, Image};
@@ -251,7 +251,7 @@ impl Specialized {
     /// in a pass of their own, as they add to what the units before them wrote.
     pub(super) fn passes<'a>(&'a self, frame: FrameUses<'a>, mesh: &'a GBufferMesh) -> Vec<Pass<'a>> {
         let g = frame.gbuffer_reads();
-        let FrameUses { ctx, gbuffer, area, constants: c, objects, materials, lights, units, writes } = frame;
+        let FrameUses { ctx, gbuffer, origin, block, constants: c, objects, materials, lights, units, writes } = frame;
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let mut passes = Vec::new();
         if !self.dispatch_reset.is_empty() {
@@ -286,7 +286,6 @@ impl Specialized {
             Use::buffer(&self.tiles, Access::COMPUTE_WRITE),
         ];
         uses.extend(writes.iter().copied());
-        let (origin, block) = tile_block(area, TILE);
         let push = ClassifyPush {
             objects,
             units: self.unit_count,
@@ -308,7 +307,6 @@ impl Specialized {
         // Blending units read what the units before them wrote.
         let written = if self.blended { Access::COMPUTE_READ_WRITE } else { Access::COMPUTE_WRITE };
         uses.extend(writes.iter().map(|w| Use { access: written, ..*w }));
-        let (origin, block) = tile_block(area, TILE);
         let push = self.push(&c, origin);
         if self.blended {
             for unit in 0..self.unit_count as usize {
@@ -384,8 +382,8 @@ impl Specialized {
     }
 
     /// Unit `index`'s dispatch: over its tiles (tiled) or the `block` of tiles from the push
-    /// constants' origin. Without blending it
-    /// writes only its own unit's pixels; with blending, it adds to the units before it.
+    /// constants' origin. Without blending it writes only its own unit's pixels; with
+    /// blending, it adds to the units before it.
     fn record_unit(
         &self,
         ctx: &Context,

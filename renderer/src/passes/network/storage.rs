@@ -8,7 +8,7 @@ use super::interface::SEVERAL_LIGHTS_ID;
 use super::layout::UNIT_STRIDE;
 use super::units::NetworkUnit;
 use super::{network_bindings, FrameUses, NetworkOutputs, Shared, Written, TILE};
-use crate::backend::compute::{tile_block, Bind, ComputePass, Dispatch};
+use crate::backend::compute::{Bind, ComputePass, Dispatch};
 use crate::backend::context::Context;
 use crate::backend::guard::Destroy;
 use crate::backend::resources::Buffer;
@@ -92,10 +92,9 @@ impl Storage {
     /// The frame's one dispatch.
     pub(super) fn pass<'a>(&'a self, frame: FrameUses<'a>) -> Pass<'a> {
         let mut uses = frame.gbuffer_reads();
-        let FrameUses { ctx, area, constants: c, objects, materials, lights, units, writes, .. } = frame;
+        let FrameUses { ctx, origin, block, constants: c, objects, materials, lights, units, writes, .. } = frame;
         uses.extend([materials, lights, units, Use::buffer(&self.weights, Access::COMPUTE_READ)]);
         uses.extend(writes);
-        let (origin, block) = tile_block(area, TILE);
         let push = StoragePush { eye: c.eye, light_count: c.light_count, objects, origin };
         Pass::new("network (storage buffer)", uses, move |cmd| {
             // Pipeline 1 is for frames of several lights (SEVERAL_LIGHTS).
