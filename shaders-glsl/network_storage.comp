@@ -4,6 +4,9 @@
 // the constants, then the direct and indirect networks of the pixel's units (network_units.glsl),
 // summed over the lights and weighted by the units' blend weights.
 //
+// Where the G-buffer shows what a planar mirror reflects, the pixel is seen from the camera
+// reflected in the mirror and weighted by its Fresnel term (network_inputs.glsl).
+//
 // Per unit, UNIT_STRIDE floats: the direct parameters, then the indirect parameters, each with
 // the input normalisation and the output scale folded in.
 
@@ -45,9 +48,10 @@ void main() {
     vec3 emission = object > 0u ? surface_emission(id, shading) : vec3(0.0);
     vec3 direct = vec3(0.0);
     vec3 indirect = vec3(0.0);
+    Viewer viewer = pixel_viewer(id, pixel, constants.eye.xyz);
     uvec2 range = object > 0u ? object_units(object - 1u) : uvec2(0u);
     if (range.y > 0u) {
-        float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
+        float x[INPUTS] = raw_inputs(pixel, shading, viewer.eye);
         vec3 p = vec3(x[0], x[1], x[2]);
         for (uint unit = range.x; unit < range.x + range.y; ++unit) {
             float weight = unit_weight(constants.objects, unit, p);
@@ -80,6 +84,9 @@ void main() {
         vec3 reflectance = surface_reflectance(id, shading);
         direct *= reflectance;
         indirect *= reflectance;
+    }
+    if (viewer.mirrored) {
+        seen_in_mirror(viewer.fresnel, emission, direct, indirect);
     }
     imageStore(out_direct, pixel, vec4(direct, 1.0));
     imageStore(out_indirect, pixel, vec4(indirect, 1.0));

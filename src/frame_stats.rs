@@ -14,7 +14,7 @@ pub struct Stats {
     /// Milliseconds from one frame's start to the next's.
     pub frame_ms: Vec<f64>,
     /// GPU milliseconds of each timed interval, per frame.
-    pub gpu_ms: [Vec<f64>; 4],
+    pub gpu_ms: [Vec<f64>; TIMED_PASSES.len()],
     last_start: Option<Instant>,
 }
 
@@ -70,7 +70,7 @@ impl Stats {
     }
 
     /// GPU milliseconds per timed pass over the last frames.
-    pub fn recent_gpu_ms(&self) -> [f64; 4] {
+    pub fn recent_gpu_ms(&self) -> [f64; TIMED_PASSES.len()] {
         std::array::from_fn(|k| median(recent(&self.gpu_ms[k])))
     }
 
@@ -113,9 +113,10 @@ mod tests {
     #[test]
     fn summary_has_every_field() {
         let mut s = Stats { frame_ms: vec![10.0, 20.0, 30.0], ..Stats::default() };
-        s.add_timestamps(&[0, 1_000_000, 3_000_000, 3_500_000, 4_000_000], 1.0);
+        s.add_timestamps(&[0, 1_000_000, 1_500_000, 3_500_000, 4_000_000, 4_500_000], 1.0);
         let j = s.summary(3);
         assert_eq!(j["frame_ms_median"], 20.0);
+        assert_eq!(j["gpu_ms"]["mirrors_ms"], 0.5);
         assert_eq!(j["gpu_ms"]["network_ms"], 2.0);
         assert!(j["peak_rss_mib"].as_f64().unwrap() > 0.0);
     }

@@ -11,7 +11,8 @@ use rrf_baker::partition::Region;
 use rrf_baker::scene::{Aabb, Mirror, PlacedLight, Scene, View};
 use rrf_renderer::frame::{Frame, FrameConstants, FrameOutput, FramePixels, FrameScene, FrameShaders, Shown};
 use rrf_renderer::passes::gbuffer::{box_in_view, box_on_screen};
-use rrf_renderer::passes::network::{LeafBlend, NetworkShaders, NetworkUnit, NetworkWeights, Variant};
+use rrf_renderer::passes::mirror::Reflected;
+use rrf_renderer::passes::network::{LeafBlend, NetworkShaders, NetworkUnit, NetworkWeights, Variant, MAX_MIRRORS};
 use rrf_renderer::{vk, Context};
 
 use crate::direct_mode::DirectMode;
@@ -35,8 +36,7 @@ const FRAME_SHADERS: FrameShaders<'static> = FrameShaders {
     shadow_vertex: shaders::SHADOW_VERT,
     shadow_fragment: shaders::SHADOW_FRAG,
     tonemap: shaders::TONEMAP_COMP,
-    mirror: shaders::MIRROR_COMP,
-    mirror_mask: shaders::MIRROR_MASK_COMP,
+    mirror_merge: shaders::MIRROR_MERGE_COMP,
     overlay: shaders::OVERLAY_COMP,
     font: &font8x8::legacy::BASIC_LEGACY,
 };
@@ -110,19 +110,22 @@ impl SceneFrame {
     }
 
     /// The passes' constants for a frame of `settings`: the mirrors among them are those in
-    /// view whose reflecting side the camera is on.
+    /// view whose reflecting side the camera is on, at most [`MAX_MIRRORS`], the largest on
+    /// screen first.
     pub fn constants(&self, settings: &FrameSettings) -> FrameConstants {
         let extent = self.gpu.extent();
         let aspect = extent.width as f32 / extent.height as f32;
         let gbuffer = gbuffer_constants(&settings.view, aspect, self.light_object);
         let m = &gbuffer.view_projection;
         let mirrors = self.mirrors.iter().filter(|(_, b)| box_in_view(m, b.min.to_array(), b.max.to_array()));
-        let mirrors = mirrors
+        let mut mirrors: Vec<Reflected> = mirrors
             .filter_map(|(mirror, b)| {
                 let area = box_on_screen(m, b.min.to_array(), b.max.to_array(), extent);
                 reflected(&settings.view, aspect, self.light_object, mirror, area)
             })
             .collect();
+        mirrors.sort_by_key(|r| std::cmp::Reverse(u64::from(r.area.extent.width) * u64::from(r.area.extent.height)));
+        mirrors.truncate(MAX_MIRRORS as usize);
         FrameConstants {
             gbuffer,
             light_copies: light_copies(self.default_light, &settings.lights),

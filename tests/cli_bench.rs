@@ -46,9 +46,9 @@ fn bench_prints_the_figures() {
     // falls back to them too.
     assert_eq!(bytes["tiled display"], bytes["tiled radiance"], "blended units fall back to radiance: {bytes:?}");
 
-    // Models with hard cuts (their blend band set to 0): the dining room's display frame writes
-    // one RGBA8 image instead of three RGBA32F ones and a tonemap; the glossy room's mirror adds
-    // to the radiance images, so its display frame falls back to them.
+    // Models with hard cuts (their blend band set to 0): the display frame writes one RGBA8
+    // image instead of three RGBA32F ones and a tonemap, in the dining room and in the glossy
+    // room, whose mirror's reflection the network pass shades with the rest.
     let display_and_radiance = |scene: &str| {
         let mut hard =
             Model::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(scene).join("model.safetensors"), None).unwrap();
@@ -76,7 +76,7 @@ fn bench_prints_the_figures() {
     let (display, radiance) = display_and_radiance("scenes/many-objects");
     assert!(display < radiance, "many-objects: display {display} bytes, radiance {radiance}");
     let (display, radiance) = display_and_radiance("scenes/glossy-room");
-    assert_eq!(display, radiance, "a scene with a mirror falls back to radiance");
+    assert!(display < radiance, "glossy-room: display {display} bytes, radiance {radiance}");
 }
 
 #[test]

@@ -21,7 +21,7 @@ fn compare(scene_name: &str, view_name: &str, width: u32, height: u32) {
 
     let ctx = gpu();
     let extent = vk::Extent2D { width, height };
-    let targets = GBufferTargets::new(&ctx, extent).unwrap();
+    let targets = GBufferTargets::new(&ctx, extent, false).unwrap();
     let (vertices, indices) = gbuffer_mesh(&scene);
     let (materials, texture_texels) = surface_materials(&scene);
     let mesh = GBufferMesh::new(&ctx, &vertices, &indices, &materials, &texture_texels).unwrap();

@@ -244,9 +244,10 @@ fn analytic_direct_needs_no_direct_networks() {
     assert!(full == stripped, "the direct networks changed an analytic frame");
 }
 
-/// The glossy room's mirror: what it reflects, drawn by the G-buffer and network passes again
-/// in its plane and weighted by its Fresnel term, against the CPU's reflected rays through the
-/// same networks. Two lights, so that the reflection sums them.
+/// The glossy room's mirror: what it reflects, drawn by the G-buffer pass again in its plane,
+/// merged into the frame's G-buffer and shaded by the one network pass from the mirrored
+/// camera, weighted by its Fresnel term, against the CPU's reflected rays through the same
+/// networks. Two lights, so that the reflection sums them.
 #[test]
 fn gpu_matches_cpu_inference_in_a_mirror() {
     let lights = [

@@ -4,8 +4,9 @@
 //! ([`Frame::draw`], with a [`FrameLoop`] and optionally a window's [`Presenter`]) or into a
 //! one-off submission that reads images back ([`Frame::render`]).
 //!
-//! In a scene with planar mirrors the G-buffer and network passes run again for each mirror
-//! in view, on the scene seen in it, and the mirror pass adds what they saw
+//! In a scene with planar mirrors the G-buffer pass runs again for each mirror in view, on the
+//! scene seen in it, and a merge step puts what it drew into the frame's G-buffer at the
+//! mirror's pixels, which the network pass then shades with the others
 //! ([`crate::passes::mirror`]).
 //!
 //! Camera, lights, exposure and the component shown are per-frame constants: one `Frame`
@@ -25,18 +26,17 @@ use crate::error::{Error, Result};
 use crate::lights::NetworkLight;
 use crate::passes::gbuffer::{GBufferConstants, GBufferPass, GBufferTargets, GBufferTexel, LightCopy};
 use crate::passes::mesh::{GBufferMesh, GBufferVertex, SurfaceMaterial};
-use crate::passes::mirror::{MirrorImages, MirrorPass, Reflected};
-use crate::passes::network::{
-    DirectLight, NetworkConstants, NetworkOutputs, NetworkPass, NetworkShaders, NetworkUnit, Variant,
-};
+use crate::passes::mirror::{MirrorPass, Reflected};
+use crate::passes::network::{DirectLight, NetworkConstants, NetworkPass, NetworkShaders, NetworkUnit, Variant};
 use crate::passes::overlay::{OverlayPass, TextGrid};
 use crate::passes::tonemap::TonemapPass;
 
-/// Timestamps a frame writes: start, after the G-buffer, after the network pass, after the
-/// tonemap pass, after the rest (overlay, presentation blit, read-back).
-pub const TIMESTAMPS: u32 = 5;
+/// Timestamps a frame writes: start, after the G-buffer, after the mirrors' G-buffers and
+/// merge steps, after the network pass, after the tonemap pass, after the rest (overlay,
+/// presentation blit, read-back).
+pub const TIMESTAMPS: u32 = 6;
 /// Names of the intervals between consecutive timestamps.
-pub const TIMED_PASSES: [&str; 4] = ["gbuffer", "network", "tonemap", "overlay+present"];
+pub const TIMED_PASSES: [&str; 5] = ["gbuffer", "mirrors", "network", "tonemap", "overlay+present"];
 
 /// Which light the display image shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,8 +86,7 @@ pub struct FrameShaders<'a> {
     pub shadow_vertex: &'a [u32],
     pub shadow_fragment: &'a [u32],
     pub tonemap: &'a [u32],
-    pub mirror: &'a [u32],
-    pub mirror_mask: &'a [u32],
+    pub mirror_merge: &'a [u32],
     pub overlay: &'a [u32],
     /// 8×8 glyphs of ASCII, one byte per row.
     pub font: &'a [[u8; 8]; 128],
@@ -171,38 +170,33 @@ impl Frame {
         output: FrameOutput,
     ) -> Result<Self> {
         // Each part is destroyed again if a later one cannot be made.
-        let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
+        let targets = ctx.guard(GBufferTargets::new(ctx, extent, scene.mirrors)?);
         let mesh = ctx.guard(GBufferMesh::new(ctx, scene.vertices, scene.indices, scene.surfaces, scene.texels)?);
         let gbuffer = ctx.guard(GBufferPass::new(ctx, shaders.gbuffer_vertex, shaders.gbuffer_fragment, &mesh)?);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
-        // Units that blend add to each other's radiance images, and mirrors add to their own
-        // pixels; the frame then tonemaps those.
+        // Units that blend add to each other's radiance images; the frame then tonemaps those.
         let blended = scene.units.iter().any(NetworkUnit::blends);
         let writes_display = output == FrameOutput::Display && variant != Variant::Storage && !blended;
-        let display = (writes_display && !scene.mirrors).then_some(&*ldr);
-        let network_pass = |targets: &GBufferTargets, display| {
-            let direct = match scene.analytic_light {
-                None => DirectLight::Learned,
-                Some(light) => DirectLight::Analytic {
-                    light,
-                    shadow_vertex: shaders.shadow_vertex,
-                    shadow_fragment: shaders.shadow_fragment,
-                },
-            };
-            let (objects, units, materials) = (scene.objects, scene.units, scene.materials);
-            NetworkPass::new(ctx, variant, &shaders.network, targets, objects, units, materials, display, direct)
+        let display = writes_display.then_some(&*ldr);
+        let direct = match scene.analytic_light {
+            None => DirectLight::Learned,
+            Some(light) => DirectLight::Analytic {
+                light,
+                shadow_vertex: shaders.shadow_vertex,
+                shadow_fragment: shaders.shadow_fragment,
+            },
         };
-        let network = ctx.guard(network_pass(&targets, display)?);
-        let reflection = match (scene.mirrors, network.outputs()) {
-            (true, Some(frame)) => {
-                let targets_seen = ctx.guard(GBufferTargets::new(ctx, extent)?);
-                let network_seen = ctx.guard(network_pass(&targets_seen, None)?);
-                let seen = network_seen.outputs().expect("a network pass without a display image has outputs");
-                let images = MirrorImages { gbuffer: &targets, frame, seen_gbuffer: &targets_seen, seen };
-                let pass = MirrorPass::new(ctx, shaders.mirror, shaders.mirror_mask, images)?;
-                Some(Reflection { targets: targets_seen.keep(), network: network_seen.keep(), pass })
+        let (objects, units, materials) = (scene.objects, scene.units, scene.materials);
+        let network =
+            NetworkPass::new(ctx, variant, &shaders.network, &targets, objects, units, materials, display, direct);
+        let network = ctx.guard(network?);
+        let reflection = match scene.mirrors {
+            true => {
+                let seen = ctx.guard(GBufferTargets::new(ctx, extent, false)?);
+                let pass = MirrorPass::new(ctx, shaders.mirror_merge, &targets, &seen)?;
+                Some(Reflection { targets: seen.keep(), pass })
             }
-            _ => None,
+            false => None,
         };
         let reflection = ctx.guard(reflection);
         let mut tonemaps = ctx.guard(Vec::with_capacity(3));
@@ -232,7 +226,6 @@ impl Frame {
         self.network.register(&mut states);
         if let Some(r) = &self.reflection {
             r.targets.register(&mut states);
-            r.network.register(&mut states);
         }
         states.set_layout(&self.ldr, vk::ImageLayout::GENERAL);
     }
@@ -252,12 +245,12 @@ impl Frame {
         if extent == self.extent() {
             return Ok(());
         }
-        let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
+        let targets = ctx.guard(GBufferTargets::new(ctx, extent, self.targets.mirrors)?);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
         let display = self.network.outputs().is_none().then_some(&*ldr);
         self.network.resize(ctx, &targets, display)?;
-        if let (Some(r), Some(frame)) = (&mut self.reflection, self.network.outputs()) {
-            r.resize(ctx, extent, &targets, frame)?;
+        if let Some(r) = &mut self.reflection {
+            r.resize(ctx, extent, &targets)?;
         }
         std::mem::replace(&mut self.targets, targets.keep()).destroy(ctx);
         ctx.destroy_image(std::mem::replace(&mut self.ldr, ldr.keep()));
@@ -366,16 +359,20 @@ impl Frame {
             }
         };
         stamp(&mut passes, 1);
-        let display = self.network.outputs().is_none().then_some(&self.ldr);
-        let c = constants;
-        let network = NetworkConstants::new(c.gbuffer.eye, &c.lights, c.exposure_scale, c.shown.code())?;
-        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display, None)?);
-        if let (Some(r), Some(frame)) = (&self.reflection, self.network.outputs()) {
-            for mirror in &constants.mirrors {
-                passes.extend(r.passes(ctx, self, constants, mirror, frame)?);
+        if let Some(r) = &self.reflection {
+            for (slot, mirror) in constants.mirrors.iter().enumerate() {
+                passes.extend(r.passes(ctx, self, constants, mirror, slot as u32));
             }
         }
+        // The mirrors' interval ends here even in a frame without them.
+        passes.push(Pass::new("mirrors done", vec![], |_| {}));
         stamp(&mut passes, 2);
+        let display = self.network.outputs().is_none().then_some(&self.ldr);
+        let c = constants;
+        let mirror_eyes: Vec<[f32; 4]> = c.mirrors.iter().map(|m| m.gbuffer.eye).collect();
+        let network = NetworkConstants::new(c.gbuffer.eye, &c.lights, &mirror_eyes, c.exposure_scale, c.shown.code())?;
+        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display, None)?);
+        stamp(&mut passes, 3);
         if let Some(outputs) = self.network.outputs() {
             let (tonemap, hdr) = match constants.shown {
                 Shown::Gi => (&self.tonemaps[0], &outputs.gi),
@@ -386,14 +383,14 @@ impl Frame {
         }
         // The tonemap interval ends here even when the network pass did its work.
         passes.push(Pass::new("tonemap done", vec![], |_| {}));
-        stamp(&mut passes, 3);
+        stamp(&mut passes, 4);
         if let Some((grid, scale)) = overlay {
             passes.extend(self.overlay.passes(ctx, &self.ldr, grid, scale));
         }
         // The last interval always ends with a pass, even an empty one.
         passes.extend(extra);
         passes.push(Pass::new("end of frame", vec![], |_| {}));
-        stamp(&mut passes, 4);
+        stamp(&mut passes, 5);
         Ok(passes)
     }
 
@@ -417,7 +414,8 @@ impl Frame {
         Ok(self.read_back(ctx, &[&self.ldr], Some(constants))?.remove(0))
     }
 
-    /// Object ids + 1 of the last frame's pixels (0: nothing).
+    /// Object ids + 1 of the last frame's pixels (0: nothing) as the network pass shaded them:
+    /// where a mirror shows a reflection, the reflected object's.
     pub fn read_objects(&self, ctx: &Context) -> Result<Vec<u32>> {
         let ids = self.read_back(ctx, &[&self.targets.id], None)?.remove(0);
         Ok(ids.iter().map(|&v| GBufferTexel::decode([0; 4], v.to_bits(), [0; 4]).object).collect())
@@ -463,66 +461,44 @@ impl Destroy for Frame {
     }
 }
 
-/// What draws the scene seen in a mirror: its own G-buffer and network pass, and the pass that
-/// adds what they saw to the mirror's pixels.
+/// What draws the scene seen in a mirror: its own G-buffer, and the step that merges what it
+/// drew into the frame's.
 struct Reflection {
     targets: GBufferTargets,
-    network: NetworkPass,
     pass: MirrorPass,
 }
 
 impl Reflection {
-    /// Remakes the images for `extent` and points the mirror pass at the frame's new
-    /// `gbuffer` and radiance images `frame`.
-    fn resize(
-        &mut self,
-        ctx: &Context,
-        extent: vk::Extent2D,
-        gbuffer: &GBufferTargets,
-        frame: &NetworkOutputs,
-    ) -> Result<()> {
-        let targets = ctx.guard(GBufferTargets::new(ctx, extent)?);
-        self.network.resize(ctx, &targets, None)?;
-        std::mem::replace(&mut self.targets, targets.keep()).destroy(ctx);
-        self.pass.rebind(ctx, self.images(gbuffer, frame));
+    /// Remakes the G-buffer for `extent` and points the merge step at it and at the frame's
+    /// new `gbuffer`.
+    fn resize(&mut self, ctx: &Context, extent: vk::Extent2D, gbuffer: &GBufferTargets) -> Result<()> {
+        let targets = GBufferTargets::new(ctx, extent, false)?;
+        std::mem::replace(&mut self.targets, targets).destroy(ctx);
+        self.pass.rebind(ctx, gbuffer, &self.targets);
         Ok(())
     }
 
-    /// What the mirror passes read and write: the frame's `gbuffer` and radiance `frame`, and
-    /// this reflection's own.
-    fn images<'a>(&'a self, gbuffer: &'a GBufferTargets, frame: &'a NetworkOutputs) -> MirrorImages<'a> {
-        let seen = self.network.outputs().expect("the reflection's network pass has outputs");
-        MirrorImages { gbuffer, frame, seen_gbuffer: &self.targets, seen }
-    }
-
-    /// The passes that add what `mirror` reflects to the radiance images `frame` of the frame
-    /// `owner` draws with `constants`.
+    /// The passes that put what `mirror`, the `slot`-th of the frame's, reflects into the
+    /// G-buffer of the frame `owner` draws with `constants`.
     fn passes<'a>(
         &'a self,
         ctx: &'a Context,
         owner: &'a Frame,
         constants: &FrameConstants,
         mirror: &Reflected,
-        frame: &'a NetworkOutputs,
-    ) -> Result<Vec<Pass<'a>>> {
-        let images = self.images(&owner.targets, frame);
+        slot: u32,
+    ) -> [Pass<'a>; 2] {
         let copies = constants.light_copies.clone();
-        let mut passes = vec![
+        [
             owner.gbuffer.pass(ctx, &self.targets, &owner.mesh, mirror.gbuffer, copies, Some(mirror.area)),
-            self.pass.mask_pass(ctx, images, mirror),
-        ];
-        let c = constants;
-        let network = NetworkConstants::new(mirror.gbuffer.eye, &c.lights, c.exposure_scale, c.shown.code())?;
-        passes.extend(self.network.passes(ctx, &self.targets, &owner.mesh, network, None, Some(mirror.area))?);
-        passes.push(self.pass.pass(ctx, images, mirror, constants.gbuffer.eye));
-        Ok(passes)
+            self.pass.pass(ctx, &owner.targets, &self.targets, mirror, slot, constants.gbuffer.eye),
+        ]
     }
 }
 
 impl Destroy for Reflection {
     fn destroy(self, ctx: &Context) {
         self.pass.destroy(ctx);
-        self.network.destroy(ctx);
         self.targets.destroy(ctx);
     }
 }

@@ -3,8 +3,10 @@
 //
 //   surface (rgba32ui): xyz the world position's float bits, w the shading normal
 //                       (octahedral, two 16-bit snorms)
-//   id (r32ui):         bits 0-15 object id + 1 (0: nothing drawn), bits 16-30 material,
-//                       bit 31 set when the front face is seen (emitters emit from it only)
+//   id (r32ui):         bits 0-15 object id + 1 (0: nothing drawn), bits 16-29 material,
+//                       bit 30 set where a mirror's merge step put what the mirror reflects
+//                       (mirror_merge.comp), bit 31 set when the front face is seen
+//                       (emitters emit from it only)
 //   shading (rgba32ui): the material's textured values at the pixel, as half floats: x base
 //                       colour r, g; y base colour b, emissive texture r; z emissive texture
 //                       g, b; and w roughness, metallic as 16-bit unorms
@@ -38,7 +40,13 @@ vec3 decode_normal(uint packed) {
 }
 
 uint encode_id(uint object_plus_one, uint material, bool front) {
-    return (object_plus_one & 0xffffu) | ((material & 0x7fffu) << 16) | (front ? 0x80000000u : 0u);
+    return (object_plus_one & 0xffffu) | ((material & 0x3fffu) << 16) | (front ? 0x80000000u : 0u);
+}
+
+const uint ID_REFLECTED = 0x40000000u;
+
+bool id_reflected(uint id) {
+    return (id & ID_REFLECTED) != 0u;
 }
 
 uint id_object(uint id) {
@@ -46,7 +54,7 @@ uint id_object(uint id) {
 }
 
 uint id_material(uint id) {
-    return (id >> 16) & 0x7fffu;
+    return (id >> 16) & 0x3fffu;
 }
 
 struct Shading {

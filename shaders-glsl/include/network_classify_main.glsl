@@ -4,9 +4,10 @@
 // unit (network_units.glsl).
 //
 // Each workgroup is one tile. It appends the tile to the list of every unit whose weight is
-// not 0 at one of its pixels (one per pixel, or several where leaves blend), counting in that unit's indirect dispatch arguments, so that each unit's
-// pipeline then runs only over its own tiles. Pixels that no network covers (background,
-// objects without networks) get their final values here: the three radiance images
+// not 0 at one of its pixels (one per pixel, or several where leaves blend), counting in
+// that unit's indirect dispatch arguments, so that each unit's pipeline then runs only over
+// its own tiles. Pixels that no network covers (background, objects without networks, as
+// seen directly or in a mirror) get their final values here: the three radiance images
 // (network_classify.comp), or with DISPLAY defined (network_classify_display.comp) the one
 // tonemapped display image.
 
@@ -17,6 +18,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "gbuffer_layout.glsl"
 #include "network_interface.glsl"
+#include "mirror_weights.glsl"
 
 layout(binding = SURFACE_BINDING, rgba32ui) uniform readonly uimage2D gbuffer_surface;
 layout(binding = ID_BINDING, r32ui) uniform readonly uimage2D gbuffer_id;
@@ -80,13 +82,18 @@ void main() {
                 Shading shading = decode_shading(imageLoad(gbuffer_shading, pixel));
                 emission = materials[id_material(packed)].rgb * shading.emissive_texture;
             }
+            vec3 direct = vec3(0.0);
+            vec3 indirect = vec3(0.0);
+            if (id_reflected(packed)) {
+                seen_in_mirror(imageLoad(mirror_weights, pixel).rgb, emission, direct, indirect);
+            }
 #ifdef DISPLAY
-            vec3 emitted = constants.shown == 0u ? emission : vec3(0.0);
-            imageStore(display, pixel, vec4(tonemap(emitted, constants.exposure_scale), 1.0));
+            vec3 shown = constants.shown == 0u ? emission + direct : constants.shown == 1u ? direct : vec3(0.0);
+            imageStore(display, pixel, vec4(tonemap(shown, constants.exposure_scale), 1.0));
 #else
-            imageStore(out_direct, pixel, vec4(0.0, 0.0, 0.0, 1.0));
-            imageStore(out_indirect, pixel, vec4(0.0, 0.0, 0.0, 1.0));
-            imageStore(out_gi, pixel, vec4(emission, 1.0));
+            imageStore(out_direct, pixel, vec4(direct, 1.0));
+            imageStore(out_indirect, pixel, vec4(indirect, 1.0));
+            imageStore(out_gi, pixel, vec4(emission + direct, 1.0));
 #endif
         }
     }

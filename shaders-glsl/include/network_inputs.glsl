@@ -9,6 +9,7 @@
 
 #include "gbuffer_layout.glsl"
 #include "network_interface.glsl"
+#include "mirror_weights.glsl"
 
 layout(binding = SURFACE_BINDING, rgba32ui) uniform readonly uimage2D gbuffer_surface;
 layout(binding = ID_BINDING, r32ui) uniform readonly uimage2D gbuffer_id;
@@ -19,11 +20,31 @@ layout(binding = SHADING_BINDING, rgba32ui) uniform readonly uimage2D gbuffer_sh
 // The frame's lights, as many as the push constants' `light_count`: copies of the moving
 // light, each at `position.xyz`, each scaling the networks' output by `scale.rgb`. Light
 // transport is linear in the emission, so the pixel's radiance is the sum over the copies.
+// Before them, the eyes (xyz) of the camera reflected in each mirror the frame shows.
 struct Light {
     vec4 position;
     vec4 scale;
 };
-layout(std430, binding = LIGHTS_BINDING) readonly buffer Lights { Light lights[]; };
+layout(std430, binding = LIGHTS_BINDING) readonly buffer Lights {
+    vec4 mirror_eyes[MAX_MIRRORS];
+    Light lights[];
+};
+
+// Where a pixel is seen from: the camera `camera`, or where the G-buffer shows what a mirror
+// reflects, the camera reflected in the mirror's plane, with the mirror's Fresnel weight.
+struct Viewer {
+    vec3 eye;
+    bool mirrored;
+    vec3 fresnel;
+};
+
+Viewer pixel_viewer(uint id, ivec2 pixel, vec3 camera) {
+    if (!id_reflected(id)) {
+        return Viewer(camera, false, vec3(1.0));
+    }
+    vec4 mirror = imageLoad(mirror_weights, pixel);
+    return Viewer(mirror_eyes[uint(mirror.a)].xyz, true, mirror.rgb);
+}
 
 // The material's textured values at `pixel`: read once per pixel and passed to the functions
 // below (lavapipe gathers every image read lane by lane).

@@ -10,6 +10,9 @@
 // chosen component, tonemapped, into one RGBA8 image. Otherwise it writes the direct, indirect
 // and global radiance as RGBA32F images, for read-back.
 //
+// Where the G-buffer shows what a planar mirror reflects, the pixel is seen from the camera
+// reflected in the mirror and weighted by its Fresnel term (network_inputs.glsl).
+//
 // ANALYTIC: direct light is computed (analytic_direct.glsl), not learned; the direct network
 // is compiled out.
 //
@@ -103,7 +106,8 @@ void main() {
         return;
     }
     Shading shading = pixel_shading(pixel);
-    float x[INPUTS] = raw_inputs(pixel, shading, constants.eye.xyz);
+    Viewer viewer = pixel_viewer(id, pixel, constants.eye.xyz);
+    float x[INPUTS] = raw_inputs(pixel, shading, viewer.eye);
     vec3 p = vec3(x[0], x[1], x[2]);
     float weight = unit_weight(OBJECTS, UNIT, p);
     if (weight == 0.0) {
@@ -143,13 +147,17 @@ void main() {
         vec3 n = vec3(x[9], x[10], x[11]);
         direct = analytic_direct(p, n, wo, shading, materials[id_material(id)].w);
     }
+    vec3 emission = surface_emission(id, shading);
+    if (viewer.mirrored) {
+        seen_in_mirror(viewer.fresnel, emission, direct, indirect);
+    }
 #ifdef DISPLAY
     vec3 shown = constants.shown == 1u ? direct
                : constants.shown == 2u ? indirect
-               : surface_emission(id, shading) + direct + indirect;
+               : emission + direct + indirect;
     imageStore(display, pixel, vec4(tonemap(shown, constants.exposure_scale), 1.0));
 #else
-    vec3 gi = surface_emission(id, shading) + direct + indirect;
+    vec3 gi = emission + direct + indirect;
     if (weight < 1.0) {
         direct *= weight;
         indirect *= weight;

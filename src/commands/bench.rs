@@ -175,7 +175,7 @@ impl Bench<'_> {
         let measured = self.measure(&frame, &settings);
         frame.destroy(ctx);
         let (bytes_per_pixel, stats, objects) = measured?;
-        let [gbuffer, network, tonemap, _rest] = &stats.gpu_ms;
+        let [gbuffer, mirrors, network, tonemap, _rest] = &stats.gpu_ms;
         // Networks evaluated per frame: two per pixel of an object that has them.
         let trained: Vec<bool> = scene.objects.iter().map(|o| model.has(&o.name, Component::Direct)).collect();
         // Analytic direct light computes direct light instead of evaluating its network.
@@ -199,6 +199,8 @@ impl Bench<'_> {
             "frames": args.frames,
             "setup_ms": setup_ms,
             "gbuffer_ms": median(gbuffer),
+            // The mirrors' G-buffers and merge steps, in a scene with planar mirrors.
+            "mirrors_ms": (!scene.mirrors().is_empty()).then(|| median(mirrors)),
             "network_ms": network_ms,
             "tonemap_ms": median(tonemap),
             "frame_ms": median(&stats.frame_ms),
@@ -261,7 +263,7 @@ fn print_row(row: &serde_json::Value, json: bool) {
     let s = |key: &str| row[key].as_str().unwrap_or_default().to_string();
     println!(
         "{} {} ({} frame, {} light{}) on {}, {}x{}, median of {} frames (pipelines built in {:.0} ms):\n  \
-         G-buffer {:.2} ms, network {:.2} ms, tonemap {:.2} ms; frame {:.2} ms (CPU, start to start, {} frames in flight)\n  \
+         G-buffer {:.2} ms,{} network {:.2} ms, tonemap {:.2} ms; frame {:.2} ms (CPU, start to start, {} frames in flight)\n  \
          {:.1} M network-pixels/s ({:.1} GFLOP/s{}); {} image bytes per pixel",
         s("scene"),
         s("variant"),
@@ -274,6 +276,7 @@ fn print_row(row: &serde_json::Value, json: bool) {
         row["frames"],
         f("setup_ms"),
         f("gbuffer_ms"),
+        row["mirrors_ms"].as_f64().map(|ms| format!(" mirrors {ms:.2} ms,")).unwrap_or_default(),
         f("network_ms"),
         f("tonemap_ms"),
         f("frame_ms"),

@@ -344,7 +344,9 @@ impl ViewerState {
             Colour::White,
         ));
         let gpu = stats.recent_gpu_ms();
-        let passes: Vec<String> = TIMED_PASSES.iter().zip(gpu).map(|(name, ms)| format!("{name} {ms:.2}")).collect();
+        // The mirrors' interval only in a scene with mirrors.
+        let timed = TIMED_PASSES.iter().zip(gpu).filter(|(name, _)| reflected.is_some() || **name != "mirrors");
+        let passes: Vec<String> = timed.map(|(name, ms)| format!("{name} {ms:.2}")).collect();
         lines.push((format!("GPU ms: {}", passes.join("  ")), Colour::White));
         let (l, k) = (self.light().position, self.light().scale);
         let edge = if self.light_at_edge { "  at the edge of its trained box" } else { "" };

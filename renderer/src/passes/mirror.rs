@@ -1,11 +1,12 @@
-//! Planar mirrors: for each mirror the frame sees, the G-buffer and network passes run again
-//! on the scene seen in the mirror's plane ([`Reflected`]), into images of their own, and the
-//! mirror pass (`mirror.comp`) adds what they saw, weighted by the mirror's Fresnel term, to
-//! the mirror's pixels. A mirror seen in a mirror shows only its emission: one reflection.
+//! Planar mirrors: for each mirror the frame sees, the G-buffer pass runs again on the scene
+//! seen in the mirror's plane ([`Reflected`]), into a G-buffer of its own, and the merge step
+//! (`mirror_merge.comp`) copies what it drew into the frame's G-buffer at the mirror's pixels,
+//! flagged as reflected and with the mirror's Fresnel weight. The frame's one network pass then
+//! shades those pixels from the reflected camera with every other pixel. A mirror seen in a
+//! mirror shows only its emission: one reflection.
 //!
-//! Every step of a reflection runs only where the mirror is: the G-buffer within the mirror's
-//! screen rectangle, the network pass only at the pixels where the frame sees the mirror (the
-//! mask step clears the others), the compute steps over the rectangle's tiles.
+//! A reflection is drawn only where the mirror is: the G-buffer within the mirror's screen
+//! rectangle, the merge over the rectangle's tiles.
 
 use ash::vk;
 
@@ -15,7 +16,6 @@ use crate::backend::guard::Destroy;
 use crate::backend::sync::{Access, Pass, Use};
 use crate::error::Result;
 use crate::passes::gbuffer::{GBufferConstants, GBufferTargets};
-use crate::passes::network::NetworkOutputs;
 
 /// One mirror as a frame sees it.
 #[derive(Clone, Copy, Debug)]
@@ -34,117 +34,71 @@ pub struct Reflected {
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct MirrorConstants {
+struct MergeConstants {
     eye: [f32; 4],
     normal: [f32; 4],
     object_plus_one: u32,
-    pad: u32,
+    slot: u32,
     /// The first pixel dispatched.
     origin: [u32; 2],
 }
 
-#[repr(C)]
-#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct MaskConstants {
-    object_plus_one: u32,
-    pad: u32,
-    /// The first pixel dispatched.
-    origin: [u32; 2],
-}
-
-/// Pixels per side of the workgroups of both steps.
+/// Pixels per side of the merge step's workgroups.
 const TILE: u32 = 8;
 
-/// The images of a frame and of the reflection drawn for it that the mirror passes read and
-/// write, in `GENERAL` layout as storage images.
-#[derive(Clone, Copy)]
-pub struct MirrorImages<'a> {
-    /// The frame's G-buffer and radiance.
-    pub gbuffer: &'a GBufferTargets,
-    pub frame: &'a NetworkOutputs,
-    /// The reflection's G-buffer and the radiance its network pass found there.
-    pub seen_gbuffer: &'a GBufferTargets,
-    pub seen: &'a NetworkOutputs,
-}
-
-/// The two compute steps of a mirror: the mask (`mirror_mask.comp`), between the reflection's
-/// G-buffer and network passes, drops from the reflection what the mirror does not show; the
-/// pass proper (`mirror.comp`) adds the reflection to the mirror's pixels. Both run only over
-/// the mirror's screen rectangle.
+/// The merge step of a mirror (`mirror_merge.comp`): puts what the reflection's G-buffer drew
+/// into the frame's, at the pixels where the frame sees the mirror.
 pub struct MirrorPass {
-    mask: ComputePass,
-    add: ComputePass,
+    merge: ComputePass,
 }
 
 impl MirrorPass {
-    /// `add` and `mask` are the SPIR-V of `mirror.comp` and `mirror_mask.comp`.
-    pub fn new(ctx: &Context, add: &[u32], mask: &[u32], images: MirrorImages) -> Result<Self> {
-        let (size, tile) = (std::mem::size_of::<MirrorConstants>() as u32, (TILE, TILE));
-        let add = ctx.guard(ComputePass::new(ctx, "mirror", add, &add_bindings(images), size, tile)?);
-        let size = std::mem::size_of::<MaskConstants>() as u32;
-        let mask = ComputePass::new(ctx, "mirror mask", mask, &mask_bindings(images), size, tile)?;
-        Ok(MirrorPass { mask, add: add.keep() })
+    /// `merge` is the SPIR-V of `mirror_merge.comp`; `frame` the frame's G-buffer (made for
+    /// mirrors), `seen` the reflection's.
+    pub fn new(ctx: &Context, merge: &[u32], frame: &GBufferTargets, seen: &GBufferTargets) -> Result<Self> {
+        let size = std::mem::size_of::<MergeConstants>() as u32;
+        let merge = ComputePass::new(ctx, "mirror merge", merge, &bindings(frame, seen), size, (TILE, TILE))?;
+        Ok(MirrorPass { merge })
     }
 
-    /// Points the passes at other images (after a resize); no frame that uses them may be
+    /// Points the step at other G-buffers (after a resize); no frame that uses them may be
     /// pending.
-    pub fn rebind(&self, ctx: &Context, images: MirrorImages) {
-        self.add.rebind(ctx, &add_bindings(images));
-        self.mask.rebind(ctx, &mask_bindings(images));
+    pub fn rebind(&self, ctx: &Context, frame: &GBufferTargets, seen: &GBufferTargets) {
+        self.merge.rebind(ctx, &bindings(frame, seen));
     }
 
-    /// The mask step for a frame list, for `mirror`: run after the reflection's G-buffer pass
-    /// and before its network pass. The images are those the pass was made (or last rebound)
-    /// with.
-    pub fn mask_pass<'a>(&'a self, ctx: &'a Context, images: MirrorImages, mirror: &Reflected) -> Pass<'a> {
-        let uses = vec![
-            Use::image(&images.gbuffer.id, Access::COMPUTE_READ),
-            Use::image(&images.seen_gbuffer.id, Access::COMPUTE_READ_WRITE),
-        ];
-        let (origin, block) = tile_block(mirror.area, TILE);
-        let push = MaskConstants { object_plus_one: mirror.object + 1, pad: 0, origin };
-        Pass::new("mirror mask", uses, move |cmd: vk::CommandBuffer| {
-            self.mask.record(ctx, cmd, bytemuck::bytes_of(&push), block.width, block.height)
-        })
-    }
-
-    /// The step that adds what `mirror`, seen from `eye`, reflects, for a frame list.
-    pub fn pass<'a>(&'a self, ctx: &'a Context, images: MirrorImages, mirror: &Reflected, eye: [f32; 4]) -> Pass<'a> {
-        let gbuffer = images.gbuffer;
-        let mut uses: Vec<Use> = [&gbuffer.surface, &gbuffer.id, &gbuffer.shading]
-            .into_iter()
-            .chain(images.seen.all())
-            .map(|image| Use::image(image, Access::COMPUTE_READ))
-            .collect();
-        uses.extend(images.frame.all().into_iter().map(|image| Use::image(image, Access::COMPUTE_READ_WRITE)));
+    /// The merge step for a frame list, for `mirror`, the frame's `slot`-th, seen from `eye`:
+    /// after the G-buffer passes of the frame and of the reflection, before the network pass.
+    /// The G-buffers are those the step was made (or last rebound) with.
+    pub fn pass<'a>(
+        &'a self,
+        ctx: &'a Context,
+        frame: &GBufferTargets,
+        seen: &GBufferTargets,
+        mirror: &Reflected,
+        slot: u32,
+        eye: [f32; 4],
+    ) -> Pass<'a> {
+        let mut uses: Vec<Use> =
+            frame.colors().into_iter().map(|image| Use::image(image, Access::COMPUTE_READ_WRITE)).collect();
+        uses.extend(seen.colors().into_iter().map(|image| Use::image(image, Access::COMPUTE_READ)));
+        uses.push(Use::image(&frame.mirror_weights, Access::COMPUTE_WRITE));
         let [x, y, z] = mirror.normal;
         let (origin, block) = tile_block(mirror.area, TILE);
-        let push = MirrorConstants { eye, normal: [x, y, z, 0.0], object_plus_one: mirror.object + 1, pad: 0, origin };
-        Pass::new("mirror", uses, move |cmd: vk::CommandBuffer| {
-            self.add.record(ctx, cmd, bytemuck::bytes_of(&push), block.width, block.height)
+        let push = MergeConstants { eye, normal: [x, y, z, 0.0], object_plus_one: mirror.object + 1, slot, origin };
+        Pass::new("mirror merge", uses, move |cmd: vk::CommandBuffer| {
+            self.merge.record(ctx, cmd, bytemuck::bytes_of(&push), block.width, block.height)
         })
     }
 }
 
 impl Destroy for MirrorPass {
     fn destroy(self, ctx: &Context) {
-        self.mask.destroy(ctx);
-        self.add.destroy(ctx);
+        self.merge.destroy(ctx);
     }
 }
 
-/// `mirror.comp`'s bindings, in order.
-fn add_bindings(images: MirrorImages) -> Vec<Bind> {
-    let g = images.gbuffer;
-    [&g.surface, &g.id, &g.shading]
-        .into_iter()
-        .chain(images.seen.all())
-        .chain(images.frame.all())
-        .map(Bind::StorageImage)
-        .collect()
-}
-
-/// `mirror_mask.comp`'s bindings, in order.
-fn mask_bindings(images: MirrorImages) -> Vec<Bind> {
-    vec![Bind::StorageImage(&images.gbuffer.id), Bind::StorageImage(&images.seen_gbuffer.id)]
+/// `mirror_merge.comp`'s bindings, in order.
+fn bindings<'a>(frame: &'a GBufferTargets, seen: &'a GBufferTargets) -> Vec<Bind<'a>> {
+    frame.colors().into_iter().chain(seen.colors()).chain([&frame.mirror_weights]).map(Bind::StorageImage).collect()
 }

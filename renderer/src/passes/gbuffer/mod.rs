@@ -20,9 +20,9 @@ mod texel;
 
 pub use texel::GBufferTexel;
 
-/// The most objects and materials the packed G-buffer tells apart (16 and 15 bits).
+/// The most objects and materials the packed G-buffer tells apart (16 and 14 bits).
 pub const MAX_OBJECTS: usize = 0xffff - 1;
-pub const MAX_MATERIALS: usize = 0x7fff;
+pub const MAX_MATERIALS: usize = 0x3fff;
 
 /// Per-frame constants of the pass: a column-major view-projection matrix (Vulkan clip space:
 /// y down, depth 0..1), the eye, and the object id + 1 of the moving light's own geometry
@@ -52,6 +52,9 @@ pub struct LightCopy {
 pub const SURFACE_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
 pub const ID_FORMAT: vk::Format = vk::Format::R32_UINT;
 pub const SHADING_FORMAT: vk::Format = vk::Format::R32G32B32A32_UINT;
+/// Per pixel that shows a mirror's reflection: the mirror's Fresnel weight (rgb) and its index
+/// among the frame's mirrors (a); see `mirror_merge.comp`.
+pub const MIRROR_WEIGHTS_FORMAT: vk::Format = vk::Format::R16G16B16A16_SFLOAT;
 
 /// The G-buffer's images, in `GENERAL` layout between passes.
 pub struct GBufferTargets {
@@ -61,12 +64,19 @@ pub struct GBufferTargets {
     pub id: Image,
     /// The material's textured values: base colour, emissive texture, roughness, metallic.
     pub shading: Image,
+    /// Where the pixel shows what a planar mirror reflects (its id says so), the mirror's
+    /// weight, written by the mirror's merge step: the image's size in a frame that shows
+    /// `mirrors`, else a 1×1 stand-in that the network shaders bind and never read.
+    pub mirror_weights: Image,
+    pub mirrors: bool,
     depth: Image,
     pub extent: vk::Extent2D,
 }
 
 impl GBufferTargets {
-    pub fn new(ctx: &Context, extent: vk::Extent2D) -> Result<Self> {
+    /// The images of a G-buffer of `extent`, with room for mirror weights if it will show
+    /// `mirrors`.
+    pub fn new(ctx: &Context, extent: vk::Extent2D, mirrors: bool) -> Result<Self> {
         let color =
             vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC;
         let image = |name, format, usage| ctx.create_image(name, extent, format, usage).map(|i| ctx.guard(i));
@@ -74,8 +84,15 @@ impl GBufferTargets {
         let id = image("gbuffer id", ID_FORMAT, color)?;
         let shading = image("gbuffer shading", SHADING_FORMAT, color)?;
         let depth = image("gbuffer depth", DEPTH_FORMAT, vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT)?;
+        let weights_extent = if mirrors { extent } else { vk::Extent2D { width: 1, height: 1 } };
+        let mirror_weights = ctx.guard(ctx.create_image(
+            "mirror weights",
+            weights_extent,
+            MIRROR_WEIGHTS_FORMAT,
+            vk::ImageUsageFlags::STORAGE,
+        )?);
         ctx.submit_once(|cmd| {
-            for image in [&surface, &id, &shading] {
+            for image in [&surface, &id, &shading, &mirror_weights] {
                 ctx.transition(cmd, image, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL);
             }
             ctx.transition(cmd, &depth, vk::ImageLayout::UNDEFINED, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
@@ -84,18 +101,21 @@ impl GBufferTargets {
             surface: surface.keep(),
             id: id.keep(),
             shading: shading.keep(),
+            mirror_weights: mirror_weights.keep(),
+            mirrors,
             depth: depth.keep(),
             extent,
         })
     }
 
-    fn colors(&self) -> [&Image; 3] {
+    /// The images the G-buffer pass draws: surface, id, shading.
+    pub fn colors(&self) -> [&Image; 3] {
         [&self.surface, &self.id, &self.shading]
     }
 
     /// Records where `new` left the images.
     pub fn register(&self, states: &mut ResourceStates) {
-        for image in self.colors() {
+        for image in self.colors().into_iter().chain([&self.mirror_weights]) {
             states.set_layout(image, vk::ImageLayout::GENERAL);
         }
         states.set_layout(&self.depth, vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL);
@@ -108,7 +128,7 @@ impl GBufferTargets {
 
 impl Destroy for GBufferTargets {
     fn destroy(self, ctx: &Context) {
-        for image in [self.surface, self.id, self.shading, self.depth] {
+        for image in [self.surface, self.id, self.shading, self.mirror_weights, self.depth] {
             ctx.destroy_image(image);
         }
     }

@@ -10,6 +10,9 @@ pub struct GBufferTexel {
     pub object: u32,
     pub material: u32,
     pub front: bool,
+    /// Whether the pixel shows what a planar mirror reflects, put there by the mirror's merge
+    /// step (`mirror_merge.comp`).
+    pub reflected: bool,
     pub base_color: [f32; 3],
     pub roughness: f32,
     pub metallic: f32,
@@ -35,8 +38,9 @@ impl GBufferTexel {
             position: [f32::from_bits(surface[0]), f32::from_bits(surface[1]), f32::from_bits(surface[2])],
             normal: n.map(|c| c / length),
             object: id & 0xffff,
-            material: (id >> 16) & 0x7fff,
+            material: (id >> 16) & 0x3fff,
             front: id >> 31 == 1,
+            reflected: (id >> 30) & 1 == 1,
             base_color: [half(shading[0]), half(shading[0] >> 16), half(shading[1])],
             roughness: unorm(shading[3]),
             metallic: unorm(shading[3] >> 16),

@@ -8,7 +8,8 @@
 // - 4: the lights (classification: the units' dispatch arguments);
 // - 5: the variant's buffer (storage: the weights; classification and specialized: the
 //   tile lists);
-// - from 6: what it writes: the direct, indirect and global radiance images, or the one
+// - 6: the mirror weights (`mirror_merge.comp`), read where the G-buffer shows a reflection;
+// - from 7: what it writes: the direct, indirect and global radiance images, or the one
 //   display image;
 // - then the specialized variants' shadow maps, and last the unit table.
 //
@@ -23,8 +24,13 @@ pub const LIGHTS_BINDING: u32 = 4;
 pub const DISPATCH_BINDING: u32 = 4;
 pub const WEIGHTS_BINDING: u32 = 5;
 pub const TILES_BINDING: u32 = 5;
+pub const MIRROR_BINDING: u32 = 6;
 /// The first image the pass writes; the others follow it.
-pub const FIRST_OUTPUT_BINDING: u32 = 6;
+pub const FIRST_OUTPUT_BINDING: u32 = 7;
+
+/// The most planar mirrors a frame shows reflections in: the eyes of their reflected cameras
+/// head the lights buffer.
+pub const MAX_MIRRORS: u32 = 8;
 
 /// The G-buffer's object value (object id + 1) a specialized pipeline shades.
 pub const OBJECT_ID: u32 = 0;

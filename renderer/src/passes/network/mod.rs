@@ -47,6 +47,7 @@ pub use weights::{LeafBlend, NetworkWeights};
 mod layout {
     include!("../../../../baker/src/network_layout.rs");
 }
+pub use interface::MAX_MIRRORS;
 pub use layout::{INPUTS, PARAMETERS, UNIT_STRIDE};
 
 /// Pixels per side of the tiles the classify pass sorts; the workgroup size of both shaders.
@@ -96,7 +97,9 @@ pub enum DirectLight<'a> {
 #[derive(Clone, Copy, Debug)]
 pub struct NetworkConstants {
     eye: [f32; 4],
-    lights: [NetworkLight; MAX_LIGHTS],
+    /// What the shaders' lights buffer holds: the eyes of the camera reflected in the frame's
+    /// mirrors, then the lights.
+    frame: FrameLights,
     light_count: u32,
     /// 2^EV.
     exposure_scale: f32,
@@ -104,21 +107,49 @@ pub struct NetworkConstants {
     shown: u32,
 }
 
+/// The network shaders' lights buffer (`network_inputs.glsl`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct FrameLights {
+    mirror_eyes: [[f32; 4]; MAX_MIRRORS as usize],
+    lights: [NetworkLight; MAX_LIGHTS],
+}
+
 impl NetworkConstants {
-    /// The constants of a frame seen from `eye` and lit by `lights` (1 to [`MAX_LIGHTS`]);
-    /// `exposure_scale` (2^EV) and `shown` (0 global, 1 direct, 2 indirect) matter only to a
-    /// pass that writes a display image.
-    pub fn new(eye: [f32; 4], lights: &[NetworkLight], exposure_scale: f32, shown: u32) -> Result<Self> {
+    /// The constants of a frame seen from `eye` and lit by `lights` (1 to [`MAX_LIGHTS`]),
+    /// whose `mirror_eyes` (at most [`MAX_MIRRORS`]) are the camera reflected in each mirror
+    /// it shows, in the order of the mirrors' merge steps; `exposure_scale` (2^EV) and `shown`
+    /// (0 global, 1 direct, 2 indirect) matter only to a pass that writes a display image.
+    pub fn new(
+        eye: [f32; 4],
+        lights: &[NetworkLight],
+        mirror_eyes: &[[f32; 4]],
+        exposure_scale: f32,
+        shown: u32,
+    ) -> Result<Self> {
         if lights.is_empty() || lights.len() > MAX_LIGHTS {
             return Err(Error::Invalid(format!("{} lights; a frame has 1 to {MAX_LIGHTS}", lights.len())));
         }
-        let mut all = [NetworkLight::default(); MAX_LIGHTS];
-        all[..lights.len()].copy_from_slice(lights);
-        Ok(NetworkConstants { eye, lights: all, light_count: lights.len() as u32, exposure_scale, shown })
+        if mirror_eyes.len() > MAX_MIRRORS as usize {
+            return Err(Error::Invalid(format!("{} mirrors; a frame shows at most {MAX_MIRRORS}", mirror_eyes.len())));
+        }
+        let mut frame = FrameLights {
+            mirror_eyes: [[0.0; 4]; MAX_MIRRORS as usize],
+            lights: [NetworkLight::default(); MAX_LIGHTS],
+        };
+        frame.mirror_eyes[..mirror_eyes.len()].copy_from_slice(mirror_eyes);
+        frame.lights[..lights.len()].copy_from_slice(lights);
+        Ok(NetworkConstants { eye, frame, light_count: lights.len() as u32, exposure_scale, shown })
     }
 
     fn lights(&self) -> &[NetworkLight] {
-        &self.lights[..self.light_count as usize]
+        &self.frame.lights[..self.light_count as usize]
+    }
+
+    /// The lights buffer's bytes: the mirrors' eyes and the frame's lights.
+    fn buffer_bytes(&self) -> &[u8] {
+        let bytes = bytemuck::bytes_of(&self.frame);
+        &bytes[..std::mem::offset_of!(FrameLights, lights) + std::mem::size_of_val(self.lights())]
     }
 }
 
@@ -188,7 +219,8 @@ pub struct NetworkPass {
     extent: vk::Extent2D,
     /// Per material: rgb emitted radiance, roughness (what the G-buffer's material ids index).
     materials: Buffer,
-    /// The frame's lights ([`NetworkLight`]), written at the start of each frame.
+    /// The mirrors' eyes and the frame's lights ([`FrameLights`]), written at the start of
+    /// each frame.
     lights: Buffer,
     /// The radiance images; `None` when the pass writes a display image instead.
     outputs: Option<NetworkOutputs>,
@@ -237,7 +269,7 @@ impl NetworkPass {
             ctx.guard(ctx.create_buffer_with_data("materials", bytes, vk::BufferUsageFlags::STORAGE_BUFFER)?);
         let lights = ctx.guard(ctx.create_buffer(
             "network lights",
-            (MAX_LIGHTS * std::mem::size_of::<NetworkLight>()) as u64,
+            std::mem::size_of::<FrameLights>() as u64,
             vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?);
@@ -359,9 +391,9 @@ impl NetworkPass {
             .map(|image| Use::image(image, Access::COMPUTE_WRITE))
             .collect();
         let upload = Pass::new("network lights", vec![Use::buffer(&self.lights, Access::TRANSFER_WRITE)], move |cmd| {
-            // SAFETY: recording outside a render pass; at most MAX_LIGHTS × 32 bytes, a multiple
-            // of 4 and under vkCmdUpdateBuffer's 64 KiB.
-            unsafe { ctx.device.cmd_update_buffer(cmd, self.lights.raw, 0, bytemuck::cast_slice(c.lights())) };
+            // SAFETY: recording outside a render pass; at most the buffer's size (under 1 KiB), a
+            // multiple of 4 and under vkCmdUpdateBuffer's 64 KiB.
+            unsafe { ctx.device.cmd_update_buffer(cmd, self.lights.raw, 0, c.buffer_bytes()) };
         });
         let whole = vk::Rect2D { offset: vk::Offset2D::default(), extent: self.extent };
         let (origin, block) = tile_block(area.unwrap_or(whole), TILE);
@@ -430,16 +462,20 @@ struct FrameUses<'a> {
 }
 
 impl<'a> FrameUses<'a> {
-    /// The G-buffer's images, which every network shader reads.
+    /// The G-buffer's images, which every network shader reads, with the mirror weights in a
+    /// frame that shows mirrors (elsewhere a stand-in nothing writes).
     fn gbuffer_reads(&self) -> Vec<Use> {
-        let g = [&self.gbuffer.surface, &self.gbuffer.id, &self.gbuffer.shading];
-        g.into_iter().map(|image| Use::image(image, Access::COMPUTE_READ)).collect()
+        let g = self.gbuffer;
+        let weights = g.mirrors.then_some(&g.mirror_weights);
+        let images = g.colors().into_iter().chain(weights);
+        images.map(|image| Use::image(image, Access::COMPUTE_READ)).collect()
     }
 }
 
 /// The bindings of a network shader, in the order of [`interface`]: the G-buffer and the
 /// materials, `fourth` (the lights, or the classification's dispatch arguments), the
-/// variant's `buffer` (weights or tile lists), what the pass writes, then `rest`.
+/// variant's `buffer` (weights or tile lists), the mirror weights, what the pass writes, then
+/// `rest`.
 fn network_bindings<'a>(
     gbuffer: &'a GBufferTargets,
     shared: Shared<'a>,
@@ -456,6 +492,7 @@ fn network_bindings<'a>(
         (SHADING_BINDING, Bind::StorageImage(&gbuffer.shading)),
         (LIGHTS_BINDING, Bind::StorageBuffer(fourth)),
         (WEIGHTS_BINDING, Bind::StorageBuffer(buffer)),
+        (MIRROR_BINDING, Bind::StorageImage(&gbuffer.mirror_weights)),
     ];
     const _: () = assert!(LIGHTS_BINDING == DISPATCH_BINDING && WEIGHTS_BINDING == TILES_BINDING);
     // A set binds each resource at its position in the list.

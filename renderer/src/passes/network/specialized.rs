@@ -251,7 +251,7 @@ impl Specialized {
     /// in a pass of their own, as they add to what the units before them wrote.
     pub(super) fn passes<'a>(&'a self, frame: FrameUses<'a>, mesh: &'a GBufferMesh) -> Vec<Pass<'a>> {
         let g = frame.gbuffer_reads();
-        let FrameUses { ctx, gbuffer, origin, block, constants: c, objects, materials, lights, units, writes } = frame;
+        let FrameUses { ctx, origin, block, constants: c, objects, materials, lights, units, writes, .. } = frame;
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let mut passes = Vec::new();
         if !self.dispatch_reset.is_empty() {
@@ -276,15 +276,13 @@ impl Specialized {
             let positions = c.lights().iter().map(|l| [l.position[0], l.position[1], l.position[2]]).collect();
             passes.push(shadow.pass(ctx, mesh, positions));
         }
-        let mut uses = vec![
-            read(&gbuffer.id),
-            read(&gbuffer.shading),
-            read(&gbuffer.surface),
+        let mut uses = g.clone();
+        uses.extend([
             materials,
             units,
             Use::buffer(&self.dispatch, Access::COMPUTE_READ_WRITE),
             Use::buffer(&self.tiles, Access::COMPUTE_WRITE),
-        ];
+        ]);
         uses.extend(writes.iter().copied());
         let push = ClassifyPush {
             objects,
