@@ -22,24 +22,25 @@ pub(crate) fn cleared_depth(depth: &Image) -> vk::RenderingAttachmentInfo<'stati
 }
 
 /// Records a dynamic rendering of `info` into `cmd` (recording, outside a render pass):
-/// `draw` records what is drawn inside it, with the viewport and scissor set to the render
-/// area and `pipeline` bound with `layout`'s set 0 (`set`, if any). `mirrored` says the view
-/// is seen in a mirror, which turns the scene's counter-clockwise front faces clockwise on
-/// screen.
+/// `draw` records what is drawn inside it, with the viewport set to `view` (the rectangle
+/// clip space maps to, which may be larger than the render area when only part of the image
+/// is drawn), the scissor to the render area, and `pipeline` bound with `layout`'s set 0
+/// (`set`, if any). `mirrored` says the view is seen in a mirror, which turns the scene's
+/// counter-clockwise front faces clockwise on screen.
 pub(crate) fn render(
     ctx: &Context,
     cmd: vk::CommandBuffer,
     info: &vk::RenderingInfo,
+    view: vk::Rect2D,
     (pipeline, layout, set): (vk::Pipeline, vk::PipelineLayout, Option<vk::DescriptorSet>),
     mirrored: bool,
     draw: impl FnOnce(),
 ) {
     let device = &ctx.device;
-    let area = info.render_area;
     // SAFETY: `cmd` is recording outside a render pass (the caller's contract); the
     // attachments, the pipeline and the set belong to this device and outlive the frame.
     unsafe { device.cmd_begin_rendering(cmd, info) };
-    set_viewport(ctx, cmd, area);
+    set_viewport(ctx, cmd, view, info.render_area);
     let front = if mirrored { vk::FrontFace::CLOCKWISE } else { vk::FrontFace::COUNTER_CLOCKWISE };
     // SAFETY: as above; every pipeline of `Raster` takes the front face dynamically.
     unsafe { device.cmd_set_front_face(cmd, front) };
@@ -54,21 +55,21 @@ pub(crate) fn render(
     unsafe { device.cmd_end_rendering(cmd) };
 }
 
-/// Sets the viewport (depth 0 to 1) and the scissor to `rect`: every pipeline of [`Raster`]
-/// takes them dynamically. Inside [`render`] only.
-pub(crate) fn set_viewport(ctx: &Context, cmd: vk::CommandBuffer, rect: vk::Rect2D) {
+/// Sets the viewport (depth 0 to 1) to `view` and the scissor to `scissor`: every pipeline of
+/// [`Raster`] takes them dynamically. Inside [`render`] only.
+pub(crate) fn set_viewport(ctx: &Context, cmd: vk::CommandBuffer, view: vk::Rect2D, scissor: vk::Rect2D) {
     let viewport = vk::Viewport {
-        x: rect.offset.x as f32,
-        y: rect.offset.y as f32,
-        width: rect.extent.width as f32,
-        height: rect.extent.height as f32,
+        x: view.offset.x as f32,
+        y: view.offset.y as f32,
+        width: view.extent.width as f32,
+        height: view.extent.height as f32,
         min_depth: 0.0,
         max_depth: 1.0,
     };
     // SAFETY: `cmd` is recording inside a rendering whose pipeline sets these dynamically.
     unsafe {
         ctx.device.cmd_set_viewport(cmd, 0, &[viewport]);
-        ctx.device.cmd_set_scissor(cmd, 0, &[rect]);
+        ctx.device.cmd_set_scissor(cmd, 0, &[scissor]);
     }
 }
 

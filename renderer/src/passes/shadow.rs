@@ -130,13 +130,14 @@ impl ShadowPass {
             .layer_count(1)
             .color_attachments(&color)
             .depth_attachment(&depth);
-        raster::render(ctx, cmd, &info, (self.pipeline, self.layout, None), false, || {
+        raster::render(ctx, cmd, &info, area, (self.pipeline, self.layout, None), false, || {
             mesh.bind(ctx, cmd);
             for (row, light) in lights.iter().take(rows as usize).enumerate() {
                 for face in 0..6u32 {
                     let offset = vk::Offset2D { x: (face * SHADOW_SIZE) as i32, y: (row as u32 * SHADOW_SIZE) as i32 };
                     let extent = vk::Extent2D { width: SHADOW_SIZE, height: SHADOW_SIZE };
-                    raster::set_viewport(ctx, cmd, vk::Rect2D { offset, extent });
+                    let tile = vk::Rect2D { offset, extent };
+                    raster::set_viewport(ctx, cmd, tile, tile);
                     let push = FacePush { light: [light[0], light[1], light[2], 1.0], face, pad: [0; 3] };
                     let stage = vk::ShaderStageFlags::VERTEX;
                     // SAFETY: `cmd` is recording; the layout has a vertex range of this size.

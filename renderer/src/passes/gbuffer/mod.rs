@@ -313,13 +313,8 @@ impl GBufferPass {
             (placed, true)
         });
         let set = self.set.as_ref().map(|s| s.set);
-        raster::render(ctx, cmd, &info, (self.pipelines[0], self.layout, set), mirror.is_some(), || {
-            if let Some(area) = mirror {
-                // The render area is the mirror's; the view is still the whole frame's.
-                raster::set_viewport(ctx, cmd, whole);
-                // SAFETY: `cmd` is recording inside this pass's rendering; the scissor is dynamic.
-                unsafe { device.cmd_set_scissor(cmd, 0, &[area]) };
-            }
+        // A mirror's render area is its rectangle; the view is still the whole frame's.
+        raster::render(ctx, cmd, &info, whole, (self.pipelines[0], self.layout, set), mirror.is_some(), || {
             mesh.bind(ctx, cmd);
             let mut textured = false;
             for (constants, moving) in still.chain(copies) {
