@@ -29,8 +29,6 @@ layout(push_constant) uniform Constants {
     vec4 eye;
     uint light_count;
     uint objects;
-    // The first pixel dispatched.
-    uvec2 origin;
 } constants;
 
 #include "network.glsl"
@@ -38,7 +36,7 @@ layout(push_constant) uniform Constants {
 #include "network_units.glsl"
 
 void main() {
-    ivec2 pixel = ivec2(constants.origin + gl_GlobalInvocationID.xy);
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, imageSize(out_gi)))) {
         return;
     }

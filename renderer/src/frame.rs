@@ -371,7 +371,7 @@ impl Frame {
         let c = constants;
         let mirror_eyes: Vec<[f32; 4]> = c.mirrors.iter().map(|m| m.gbuffer.eye).collect();
         let network = NetworkConstants::new(c.gbuffer.eye, &c.lights, &mirror_eyes, c.exposure_scale, c.shown.code())?;
-        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display, None)?);
+        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display)?);
         stamp(&mut passes, 3);
         if let Some(outputs) = self.network.outputs() {
             let (tonemap, hdr) = match constants.shown {

@@ -47,8 +47,6 @@ layout(push_constant) uniform Constants {
     // DISPLAY only: 2^EV, and the component shown (0 global, 1 direct, 2 indirect).
     float exposure_scale;
     uint shown;
-    // The first pixel of the tiles dispatched (a multiple of the tile size).
-    uvec2 origin;
 } constants;
 
 // The unit table, after the images (network_units.glsl).
@@ -64,7 +62,7 @@ void main() {
     }
     barrier();
 
-    ivec2 pixel = ivec2(constants.origin + gl_GlobalInvocationID.xy);
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (all(lessThan(pixel, imageSize(gbuffer_id)))) {
         uint packed = imageLoad(gbuffer_id, pixel).r;
         uint id = id_object(packed);
@@ -99,8 +97,7 @@ void main() {
     }
     barrier();
 
-    uvec2 group = constants.origin / gl_WorkGroupSize.xy + gl_WorkGroupID.xy;
-    uint tile = group.x | (group.y << 16);
+    uint tile = gl_WorkGroupID.x | (gl_WorkGroupID.y << 16);
     for (uint unit = lane; unit < constants.units; unit += 64u) {
         if ((seen[unit / 32u] & (1u << (unit % 32u))) != 0u) {
             uint slot = atomicAdd(dispatch[3u * unit], 1u);

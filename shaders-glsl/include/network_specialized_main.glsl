@@ -69,8 +69,6 @@ layout(push_constant) uniform Constants {
     vec4 light_intensity;
     vec4 spot_axis;
     float spot_cos_outer;
-    // Not TILED: the first pixel of the tiles dispatched (a multiple of the tile size).
-    uvec2 origin;
 } constants;
 
 #include "network_inputs.glsl"
@@ -92,7 +90,7 @@ bool earlier_units_weigh(vec3 p) {
 }
 
 void main() {
-    uvec2 tile = constants.origin / gl_WorkGroupSize.xy + gl_WorkGroupID.xy;
+    uvec2 tile = gl_WorkGroupID.xy;
     if (TILED) {
         uint packed = tiles[UNIT * constants.tile_capacity + gl_WorkGroupID.x];
         tile = uvec2(packed & 0xffffu, packed >> 16);

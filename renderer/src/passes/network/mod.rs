@@ -27,7 +27,7 @@ mod weights;
 use ash::vk;
 use gpu_allocator::MemoryLocation;
 
-use crate::backend::compute::{tile_block, Bind};
+use crate::backend::compute::Bind;
 use crate::backend::context::Context;
 use crate::backend::guard::Destroy;
 use crate::backend::resources::{Buffer, Image};
@@ -374,8 +374,7 @@ impl NetworkPass {
 
     /// The pass's steps for a frame list. The G-buffer (and for a display pass, `display`)
     /// must be the ones the pass was made or last resized for; `mesh` is the scene the
-    /// G-buffer drew, which analytic direct light draws into its shadow maps. With `area`, only
-    /// the pixels of the 8×8 tiles that it touches are written; the rest keep what they held.
+    /// G-buffer drew, which analytic direct light draws into its shadow maps.
     pub fn passes<'a>(
         &'a self,
         ctx: &'a Context,
@@ -383,7 +382,6 @@ impl NetworkPass {
         mesh: &'a GBufferMesh,
         c: NetworkConstants,
         display: Option<&'a Image>,
-        area: Option<vk::Rect2D>,
     ) -> Result<Vec<Pass<'a>>> {
         let writes: Vec<Use> = Written::of(&self.outputs, display)?
             .images()
@@ -395,13 +393,10 @@ impl NetworkPass {
             // multiple of 4 and under vkCmdUpdateBuffer's 64 KiB.
             unsafe { ctx.device.cmd_update_buffer(cmd, self.lights.raw, 0, c.buffer_bytes()) };
         });
-        let whole = vk::Rect2D { offset: vk::Offset2D::default(), extent: self.extent };
-        let (origin, block) = tile_block(area.unwrap_or(whole), TILE);
         let frame = FrameUses {
             ctx,
             gbuffer,
-            origin,
-            block,
+            extent: self.extent,
             constants: c,
             objects: self.objects,
             materials: Use::buffer(&self.materials, Access::COMPUTE_READ),
@@ -448,10 +443,7 @@ struct Shared<'a> {
 struct FrameUses<'a> {
     ctx: &'a Context,
     gbuffer: &'a GBufferTargets,
-    /// The tiles to shade: the first pixel of the first, and the size of the block of them
-    /// ([`tile_block`]).
-    origin: [u32; 2],
-    block: vk::Extent2D,
+    extent: vk::Extent2D,
     constants: NetworkConstants,
     objects: u32,
     materials: Use,

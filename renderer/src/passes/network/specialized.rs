@@ -64,8 +64,7 @@ struct SpecializedPush {
     light_intensity: [f32; 4],
     spot_axis: [f32; 4],
     spot_cos_outer: f32,
-    pad: u32,
-    origin: [u32; 2],
+    pad: [u32; 3],
 }
 
 #[repr(C)]
@@ -76,8 +75,6 @@ struct ClassifyPush {
     tile_capacity: u32,
     exposure_scale: f32,
     shown: u32,
-    pad: u32,
-    origin: [u32; 2],
 }
 
 /// The specialized variants' pipelines: the tile classification, then two per unit.
@@ -251,7 +248,7 @@ impl Specialized {
     /// in a pass of their own, as they add to what the units before them wrote.
     pub(super) fn passes<'a>(&'a self, frame: FrameUses<'a>, mesh: &'a GBufferMesh) -> Vec<Pass<'a>> {
         let g = frame.gbuffer_reads();
-        let FrameUses { ctx, origin, block, constants: c, objects, materials, lights, units, writes, .. } = frame;
+        let FrameUses { ctx, extent, constants: c, objects, materials, lights, units, writes, .. } = frame;
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let mut passes = Vec::new();
         if !self.dispatch_reset.is_empty() {
@@ -290,11 +287,9 @@ impl Specialized {
             tile_capacity: self.tile_capacity,
             exposure_scale: c.exposure_scale,
             shown: c.shown,
-            pad: 0,
-            origin,
         };
         passes.push(Pass::new("network tile classification", uses, move |cmd| {
-            self.classify.record(ctx, cmd, bytemuck::bytes_of(&push), block.width, block.height)
+            self.classify.record(ctx, cmd, bytemuck::bytes_of(&push), extent.width, extent.height)
         }));
         let mut uses = g;
         uses.extend([materials, lights, units, Use::buffer(&self.tiles, Access::COMPUTE_READ)]);
@@ -305,16 +300,16 @@ impl Specialized {
         // Blending units read what the units before them wrote.
         let written = if self.blended { Access::COMPUTE_READ_WRITE } else { Access::COMPUTE_WRITE };
         uses.extend(writes.iter().map(|w| Use { access: written, ..*w }));
-        let push = self.push(&c, origin);
+        let push = self.push(&c);
         if self.blended {
             for unit in 0..self.unit_count as usize {
                 passes.push(Pass::new("network unit (blended)", uses.clone(), move |cmd| {
-                    self.record_unit(ctx, cmd, block, &c, &push, unit)
+                    self.record_unit(ctx, cmd, extent, &c, &push, unit)
                 }));
             }
         } else {
             passes.push(Pass::new("network (specialization constants)", uses, move |cmd| {
-                (0..self.unit_count as usize).for_each(|unit| self.record_unit(ctx, cmd, block, &c, &push, unit))
+                (0..self.unit_count as usize).for_each(|unit| self.record_unit(ctx, cmd, extent, &c, &push, unit))
             }));
         }
         passes
@@ -357,9 +352,8 @@ impl Specialized {
         specialized_bindings(gbuffer, shared, &self.tiles, written, &self.direct)
     }
 
-    /// The networks' push constants for a frame with constants `c`, dispatched (if not tiled)
-    /// over the tiles from pixel `origin`.
-    fn push(&self, c: &NetworkConstants, origin: [u32; 2]) -> SpecializedPush {
+    /// The networks' push constants for a frame with constants `c`.
+    fn push(&self, c: &NetworkConstants) -> SpecializedPush {
         let (intensity, spot) = match &self.direct {
             Direct::Analytic { light, .. } => (light.intensity, light.spot),
             Direct::Learned { .. } => ([0.0; 3], None),
@@ -374,19 +368,17 @@ impl Specialized {
             light_intensity: [intensity[0], intensity[1], intensity[2], 0.0],
             spot_axis: [spot.axis[0], spot.axis[1], spot.axis[2], spot.cos_inner],
             spot_cos_outer: spot.cos_outer,
-            pad: 0,
-            origin,
+            pad: [0; 3],
         }
     }
 
-    /// Unit `index`'s dispatch: over its tiles (tiled) or the `block` of tiles from the push
-    /// constants' origin. Without blending it writes only its own unit's pixels; with
-    /// blending, it adds to the units before it.
+    /// Unit `index`'s dispatch: over its tiles (tiled) or the whole image. Without blending it
+    /// writes only its own unit's pixels; with blending, it adds to the units before it.
     fn record_unit(
         &self,
         ctx: &Context,
         cmd: vk::CommandBuffer,
-        block: vk::Extent2D,
+        extent: vk::Extent2D,
         c: &NetworkConstants,
         push: &SpecializedPush,
         index: usize,
@@ -395,7 +387,7 @@ impl Specialized {
         let dispatch = if self.tiled {
             Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * index as u64 }
         } else {
-            Dispatch::Covering { width: block.width, height: block.height }
+            Dispatch::Covering { width: extent.width, height: extent.height }
         };
         self.networks.record_pipeline(ctx, cmd, 2 * index + several, bytemuck::bytes_of(push), dispatch);
     }

@@ -22,8 +22,7 @@ struct StoragePush {
     eye: [f32; 4],
     light_count: u32,
     objects: u32,
-    /// The first pixel dispatched.
-    origin: [u32; 2],
+    pad: [u32; 2],
 }
 
 /// The storage variant's weights: per unit, the folded direct and indirect networks.
@@ -92,14 +91,14 @@ impl Storage {
     /// The frame's one dispatch.
     pub(super) fn pass<'a>(&'a self, frame: FrameUses<'a>) -> Pass<'a> {
         let mut uses = frame.gbuffer_reads();
-        let FrameUses { ctx, origin, block, constants: c, objects, materials, lights, units, writes, .. } = frame;
+        let FrameUses { ctx, extent, constants: c, objects, materials, lights, units, writes, .. } = frame;
         uses.extend([materials, lights, units, Use::buffer(&self.weights, Access::COMPUTE_READ)]);
         uses.extend(writes);
-        let push = StoragePush { eye: c.eye, light_count: c.light_count, objects, origin };
+        let push = StoragePush { eye: c.eye, light_count: c.light_count, objects, pad: [0; 2] };
         Pass::new("network (storage buffer)", uses, move |cmd| {
             // Pipeline 1 is for frames of several lights (SEVERAL_LIGHTS).
             let pipeline = usize::from(c.light_count > 1);
-            let dispatch = Dispatch::Covering { width: block.width, height: block.height };
+            let dispatch = Dispatch::Covering { width: extent.width, height: extent.height };
             self.pass.record_pipeline(ctx, cmd, pipeline, bytemuck::bytes_of(&push), dispatch)
         })
     }
