@@ -1,15 +1,14 @@
-//! The scene's triangles in one CWBVH (obvhs), built once per scene.
+//! The scene's triangles in one eight-wide BVH ([`Bvh8`]), built once per scene.
 //!
 //! The moving area light, if there is one, stays out of the BVH: it is a handful of
 //! triangles tested directly, so moving it never rebuilds the BVH.
 
 use glam::{Vec2, Vec3, Vec3A, Vec4};
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
-use obvhs::cwbvh::CwBvh;
-use obvhs::ray::{Ray, RayHit};
+use obvhs::ray::Ray;
 use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
-use obvhs::BvhBuildParams;
+
+use super::bvh8::Bvh8;
 
 use crate::scene::{AlphaMode, LightKind, Mirror, Scene};
 
@@ -26,13 +25,11 @@ pub struct TriangleInfo {
 }
 
 pub struct Geometry {
-    bvh: CwBvh,
-    /// Triangles in BVH leaf order, so that traversal indexes them directly.
-    bvh_triangles: Vec<RtTriangle>,
-    /// BVH leaf order to triangle id.
+    /// Every triangle but the moving light's.
+    bvh: Bvh8,
+    /// The BVH's primitive index to triangle id.
     bvh_ids: Vec<u32>,
-    /// BVH leaf order to whether the triangle is alpha-masked, so that a miss, the common
-    /// case, reads nothing but the triangle.
+    /// The BVH's primitive index to whether the triangle is alpha-masked.
     bvh_masked: Vec<bool>,
     /// Every triangle of the scene, by id.
     pub triangles: Vec<TriangleInfo>,
@@ -77,8 +74,7 @@ impl Geometry {
             _ => None,
         };
         let mut g = Geometry {
-            bvh: CwBvh::default(),
-            bvh_triangles: Vec::new(),
+            bvh: Bvh8::new(&[]),
             bvh_ids: Vec::new(),
             bvh_masked: Vec::new(),
             triangles: Vec::with_capacity(scene.triangle_count()),
@@ -112,20 +108,17 @@ impl Geometry {
                 }
             }
         }
-        let static_ids: Vec<u32> = (0..g.triangles.len() as u32).filter(|id| !g.moving.contains(id)).collect();
-        let tris: Vec<Triangle> = static_ids
+        g.bvh_ids = (0..g.triangles.len() as u32).filter(|id| !g.moving.contains(id)).collect();
+        g.bvh_masked = g.bvh_ids.iter().map(|&id| g.triangles[id as usize].masked).collect();
+        let tris: Vec<Triangle> = g
+            .bvh_ids
             .iter()
             .map(|&id| {
                 let [a, b, c] = g.corners(id, Vec3::ZERO);
                 Triangle { v0: a.into(), v1: b.into(), v2: c.into() }
             })
             .collect();
-        if !tris.is_empty() {
-            g.bvh = build_cwbvh_from_tris(&tris, BvhBuildParams::medium_build(), &mut Default::default());
-            g.bvh_ids = g.bvh.primitive_indices.iter().map(|&i| static_ids[i as usize]).collect();
-            g.bvh_masked = g.bvh_ids.iter().map(|&id| g.triangles[id as usize].masked).collect();
-            g.bvh_triangles = g.bvh.primitive_indices.iter().map(|&i| RtTriangle::from(&tris[i as usize])).collect();
-        }
+        g.bvh = Bvh8::new(&tris);
         g
     }
 
@@ -160,18 +153,14 @@ impl Geometry {
         }
     }
 
-    /// `test` of static triangle `i` in BVH order.
+    /// Whether the BVH's hit of its primitive `i` at `t` counts: the alpha test of a masked
+    /// triangle.
     #[inline(always)]
-    fn test_static(&self, ray: &Ray, i: usize, covers: Covers) -> f32 {
-        let t = self.bvh_triangles[i].intersect(ray);
-        if t < f32::INFINITY && self.bvh_masked[i] && !covers(Hit { t, triangle: self.bvh_ids[i], copy: 0 }) {
-            f32::INFINITY
-        } else {
-            t
-        }
+    fn accept_static(&self, i: u32, t: f32, covers: Covers) -> bool {
+        !self.bvh_masked[i as usize] || covers(Hit { t, triangle: self.bvh_ids[i as usize], copy: 0 })
     }
 
-    /// Closest hit in `[tmin, tmax]` against the BVH and the moved light triangles; a masked
+    /// Closest hit in `[0, tmax]` against the BVH and the moved light triangles; a masked
     /// triangle is hit only where `covers` says so (see [`Covers`]).
     pub fn intersect(
         &self,
@@ -181,14 +170,12 @@ impl Geometry {
         moved: &[MovedTriangle],
         covers: Covers,
     ) -> Option<Hit> {
-        let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
-        let mut hit = RayHit::none();
-        let mut best: Option<Hit> = None;
-        if !self.bvh_triangles.is_empty() && self.bvh.ray_traverse(ray, &mut hit, |r, i| self.test_static(r, i, covers))
-        {
-            best = Some(Hit { t: hit.t, triangle: self.bvh_ids[hit.primitive_id as usize], copy: 0 });
-        }
-        let mut ray = ray;
+        let mut ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
+        let mut best = self.bvh.closest(&ray, |i, t| self.accept_static(i, t, covers)).map(|(i, t)| Hit {
+            t,
+            triangle: self.bvh_ids[i as usize],
+            copy: 0,
+        });
         for m in moved {
             ray.tmax = best.map_or(tmax, |h| h.t);
             let candidate = Hit { t: m.placed.intersect(&ray), triangle: m.triangle, copy: m.copy };
@@ -202,7 +189,7 @@ impl Geometry {
     /// Whether anything lies between `origin` and `origin + dir · tmax`.
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[MovedTriangle], covers: Covers) -> bool {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
-        if !self.bvh_triangles.is_empty() && !self.bvh.ray_traverse_miss(ray, |r, i| self.test_static(r, i, covers)) {
+        if self.bvh.any(&ray, |i, t| self.accept_static(i, t, covers)) {
             return true;
         }
         moved.iter().any(|m| {

@@ -1,6 +1,7 @@
 //! The reference path tracer: the source of training data and the ground truth.
 
 pub mod bsdf;
+mod bvh8;
 pub mod camera;
 pub mod geometry;
 pub mod integrator;
