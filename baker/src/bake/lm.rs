@@ -196,6 +196,10 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
     let mut history = Vec::new();
     let mut iterations = 0;
     let mut converged = false;
+    // The training loss at `params` and at `best`: computed once, then carried over from the
+    // accepted steps.
+    let mut loss = train.mse(&params);
+    let mut best_loss = loss;
     'outer: while iterations < settings.max_iterations {
         if since_best >= settings.patience {
             converged = true;
@@ -210,7 +214,6 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
             converged = true;
             break;
         }
-        let loss = train.mse(&params);
         loop {
             // Every retry raises λ; past the limit no step helps and training stops.
             if lambda > LAMBDA_MAX {
@@ -231,6 +234,7 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
             let candidate_loss = train.mse(&candidate);
             if candidate_loss.is_finite() && candidate_loss < loss {
                 params = candidate;
+                loss = candidate_loss;
                 lambda = (lambda / 10.0).max(1e-9);
                 break;
             }
@@ -241,10 +245,11 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
         if val < best_val * (1.0 - 1e-4) {
             best_val = val;
             best = params.clone();
+            best_loss = loss;
             since_best = 0;
         } else {
             since_best += 1;
         }
     }
-    LmResult { train_mse: train.mse(&best), val_mse: best_val, params: best, iterations, converged, history }
+    LmResult { train_mse: best_loss, val_mse: best_val, params: best, iterations, converged, history }
 }
