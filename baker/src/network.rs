@@ -137,8 +137,11 @@ impl Real for f64 {
     }
 }
 
+/// The activations of the two tanh layers.
+pub type Hidden<T> = ([T; HIDDEN1], [T; HIDDEN2]);
+
 /// The two tanh layers on normalised inputs.
-pub fn hidden_layers<T: Real>(p: &[T], x: &[T; INPUTS]) -> ([T; HIDDEN1], [T; HIDDEN2]) {
+pub fn hidden_layers<T: Real>(p: &[T], x: &[T; INPUTS]) -> Hidden<T> {
     let mut h1 = [T::ZERO; HIDDEN1];
     for j in 0..HIDDEN1 {
         let mut s = p[B1 + j];
@@ -160,7 +163,11 @@ pub fn hidden_layers<T: Real>(p: &[T], x: &[T; INPUTS]) -> ([T; HIDDEN1], [T; HI
 
 /// The network on normalised inputs.
 pub fn forward(p: &[f32], x: &[f32; INPUTS]) -> [f32; OUTPUTS] {
-    let (_, h2) = hidden_layers(p, x);
+    output_layer(p, &hidden_layers(p, x).1)
+}
+
+/// The linear output layer on the second tanh layer's activations `h2`.
+pub fn output_layer(p: &[f32], h2: &[f32; HIDDEN2]) -> [f32; OUTPUTS] {
     let mut y = [0.0f32; OUTPUTS];
     for c in 0..OUTPUTS {
         let mut s = p[B3 + c];
@@ -178,7 +185,16 @@ pub fn forward_with_jacobian<T: Real>(
     x: &[T; INPUTS],
     jacobian: &mut [[T; PARAMETERS]; OUTPUTS],
 ) -> [T; OUTPUTS] {
-    let (h1, h2) = hidden_layers(p, x);
+    forward_with_jacobian_from(p, x, &hidden_layers(p, x), jacobian)
+}
+
+/// [`forward_with_jacobian`] from the hidden layers' activations, `hidden_layers(p, x)`.
+pub fn forward_with_jacobian_from<T: Real>(
+    p: &[T],
+    x: &[T; INPUTS],
+    (h1, h2): &Hidden<T>,
+    jacobian: &mut [[T; PARAMETERS]; OUTPUTS],
+) -> [T; OUTPUTS] {
     let mut y = [T::ZERO; OUTPUTS];
     for c in 0..OUTPUTS {
         let g = &mut jacobian[c];

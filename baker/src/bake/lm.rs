@@ -7,6 +7,10 @@
 //! `λ·diag(JᵀJ)` converged about twice as slowly on rrf's samples).
 //! The parameters with the lowest error on the held-out validation set are kept; training
 //! stops when that error has not improved for `patience` iterations.
+//!
+//! Checking a step evaluates the network on every training row at the new parameters; when the
+//! step is taken, that evaluation's loss and hidden activations serve the next iteration, so
+//! its Jacobian pass runs no tanh.
 
 use std::ops::Range;
 use std::time::Instant;
@@ -18,7 +22,8 @@ use faer::{Accum, Mat, Par, Side};
 use rayon::prelude::*;
 
 use crate::network::{
-    forward, forward_with_jacobian, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3,
+    forward, forward_with_jacobian_from, hidden_layers, output_layer, Hidden, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS,
+    OUTPUTS, PARAMETERS, W1, W2, W3,
 };
 use crate::trace::sampling::Rng;
 
@@ -49,12 +54,29 @@ impl Dataset {
 
     /// Mean squared error per channel of the network `params` on this set.
     pub fn mse(&self, params: &[f32]) -> f64 {
+        self.mse_of(|x| forward(params, x))
+    }
+
+    /// [`Dataset::mse`], keeping each row's hidden activations in `hidden` for the Jacobian
+    /// at the same parameters.
+    fn mse_keeping_hidden(&self, params: &[f32], hidden: &mut Vec<Hidden<f32>>) -> f64 {
+        hidden.clear();
+        self.mse_of(|x| {
+            let h = hidden_layers(params, x);
+            let y = output_layer(params, &h.1);
+            hidden.push(h);
+            y
+        })
+    }
+
+    /// Mean squared error per channel of the outputs `network(input)`, row by row in order.
+    fn mse_of(&self, mut network: impl FnMut(&[f32; INPUTS]) -> [f32; OUTPUTS]) -> f64 {
         if self.is_empty() {
             return 0.0;
         }
         let mut sum = 0.0f64;
         for (i, (x, t)) in self.inputs.iter().zip(&self.targets).enumerate() {
-            let y = forward(params, x);
+            let y = network(x);
             for c in 0..OUTPUTS {
                 let e = f64::from(self.gain(i) * y[c] - t[c]);
                 sum += e * e;
@@ -119,16 +141,20 @@ pub fn initial_parameters(seed: u64, mean_target: [f32; OUTPUTS]) -> Vec<f32> {
     p
 }
 
-/// JᵀJ (its lower triangle) and Jᵀe at `params`.
+/// JᵀJ (its lower triangle) and Jᵀe at `params`, where the training rows' hidden
+/// activations are `hidden`.
 ///
 /// The products of the Jacobian's rows, most of an iteration's time, are in f32 (twice the
 /// SIMD width of f64) over at most [`GROUP_SAMPLES`] samples; the groups are summed, and the
 /// step solved, in f64. Groups run in parallel, so the last network of a bake still trains on
 /// every core.
-fn normal_equations(train: &Dataset, params: &[f32]) -> (Mat<f64>, Mat<f64>) {
+fn normal_equations(train: &Dataset, params: &[f32], hidden: &[Hidden<f32>]) -> (Mat<f64>, Mat<f64>) {
     let groups: Vec<(Mat<f32>, Mat<f32>)> = (0..train.len().div_ceil(GROUP_SAMPLES))
         .into_par_iter()
-        .map(|g| group_normal_equations(train, params, g * GROUP_SAMPLES..((g + 1) * GROUP_SAMPLES).min(train.len())))
+        .map(|g| {
+            let samples = g * GROUP_SAMPLES..((g + 1) * GROUP_SAMPLES).min(train.len());
+            group_normal_equations(train, params, hidden, samples)
+        })
         .collect();
     let mut jtj = Mat::<f64>::zeros(PARAMETERS, PARAMETERS);
     let mut jte = Mat::<f64>::zeros(PARAMETERS, 1);
@@ -144,7 +170,12 @@ fn normal_equations(train: &Dataset, params: &[f32]) -> (Mat<f64>, Mat<f64>) {
 }
 
 /// One group's share of [`normal_equations`], in f32.
-fn group_normal_equations(train: &Dataset, params: &[f32], samples: Range<usize>) -> (Mat<f32>, Mat<f32>) {
+fn group_normal_equations(
+    train: &Dataset,
+    params: &[f32],
+    hidden: &[Hidden<f32>],
+    samples: Range<usize>,
+) -> (Mat<f32>, Mat<f32>) {
     let mut jtj = Mat::<f32>::zeros(PARAMETERS, PARAMETERS);
     let mut jte = Mat::<f32>::zeros(PARAMETERS, 1);
     // Jᵀ of one chunk, column per residual, so that each Jacobian row is written contiguously.
@@ -155,7 +186,7 @@ fn group_normal_equations(train: &Dataset, params: &[f32], samples: Range<usize>
         let end = (start + CHUNK_SAMPLES).min(samples.end);
         let rows = (end - start) * OUTPUTS;
         for (n, s) in (start..end).enumerate() {
-            let y = forward_with_jacobian(params, &train.inputs[s], &mut grads);
+            let y = forward_with_jacobian_from(params, &train.inputs[s], &hidden[s], &mut grads);
             let gain = train.gain(s);
             for c in 0..OUTPUTS {
                 let col = n * OUTPUTS + c;
@@ -196,9 +227,10 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
     let mut history = Vec::new();
     let mut iterations = 0;
     let mut converged = false;
-    // The training loss at `params` and at `best`: computed once, then carried over from the
-    // accepted steps.
-    let mut loss = train.mse(&params);
+    // The training loss and hidden activations at `params`, and the loss at `best`: computed
+    // once, then carried over from the accepted steps.
+    let (mut hidden, mut candidate_hidden) = (Vec::new(), Vec::new());
+    let mut loss = train.mse_keeping_hidden(&params, &mut hidden);
     let mut best_loss = loss;
     'outer: while iterations < settings.max_iterations {
         if since_best >= settings.patience {
@@ -206,7 +238,7 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
             break;
         }
         iterations += 1;
-        let (jtj, jte) = normal_equations(train, &params);
+        let (jtj, jte) = normal_equations(train, &params, &hidden);
         // Non-finite samples make non-finite normal equations: no step can be trusted, so
         // training stops with the best parameters so far.
         let finite = |m: &Mat<f64>| (0..m.nrows()).all(|i| (0..m.ncols()).all(|j| m[(i, j)].is_finite()));
@@ -231,10 +263,11 @@ pub fn train(train: &Dataset, validation: &Dataset, initial: Vec<f32>, settings:
             let step = llt.solve(jte.as_ref());
             let candidate: Vec<f32> =
                 params.iter().enumerate().map(|(i, &p)| (f64::from(p) - step[(i, 0)]) as f32).collect();
-            let candidate_loss = train.mse(&candidate);
+            let candidate_loss = train.mse_keeping_hidden(&candidate, &mut candidate_hidden);
             if candidate_loss.is_finite() && candidate_loss < loss {
                 params = candidate;
                 loss = candidate_loss;
+                std::mem::swap(&mut hidden, &mut candidate_hidden);
                 lambda = (lambda / 10.0).max(1e-9);
                 break;
             }
