@@ -118,22 +118,32 @@ pub fn evaluate_blended(leaves: &[&Network], raw: &[f32; INPUTS]) -> Vec3 {
 pub trait Real: Copy + std::ops::Mul<Output = Self> + std::ops::Sub<Output = Self> + std::ops::AddAssign {
     const ZERO: Self;
     const ONE: Self;
-    fn tanh(self) -> Self;
+    /// A layer's activation: tanh of every value, in place.
+    fn tanh_all(values: &mut [Self]);
 }
 
 impl Real for f32 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
-    fn tanh(self) -> Self {
-        f32::tanh(self)
+    /// Eight values at a time through `wide`'s tanh (a few ulp from the C library's, which
+    /// takes a quarter of training's time one value at a time).
+    fn tanh_all(values: &mut [Self]) {
+        for chunk in values.chunks_mut(8) {
+            let mut lanes = [0.0; 8];
+            lanes[..chunk.len()].copy_from_slice(chunk);
+            let tanh = wide::f32x8::from(lanes).tanh().to_array();
+            chunk.copy_from_slice(&tanh[..chunk.len()]);
+        }
     }
 }
 
 impl Real for f64 {
     const ZERO: Self = 0.0;
     const ONE: Self = 1.0;
-    fn tanh(self) -> Self {
-        f64::tanh(self)
+    fn tanh_all(values: &mut [Self]) {
+        for v in values {
+            *v = v.tanh();
+        }
     }
 }
 
@@ -148,16 +158,18 @@ pub fn hidden_layers<T: Real>(p: &[T], x: &[T; INPUTS]) -> Hidden<T> {
         for i in 0..INPUTS {
             s += p[W1 + j * INPUTS + i] * x[i];
         }
-        h1[j] = s.tanh();
+        h1[j] = s;
     }
+    T::tanh_all(&mut h1);
     let mut h2 = [T::ZERO; HIDDEN2];
     for k in 0..HIDDEN2 {
         let mut s = p[B2 + k];
         for j in 0..HIDDEN1 {
             s += p[W2 + k * HIDDEN1 + j] * h1[j];
         }
-        h2[k] = s.tanh();
+        h2[k] = s;
     }
+    T::tanh_all(&mut h2);
     (h1, h2)
 }
 
