@@ -35,7 +35,7 @@ fn jacobian_matches_finite_differences() {
     }
 }
 
-/// The f32 activation, eight lanes at a time with a scalar tail (a layer of 20 is 8 + 8 + 4),
+/// The f32 activation, eight lanes at a time with the tail padded (a layer of 20 is 8 + 8 + 4),
 /// stays within a few ulp of f64's tanh from 0 to saturation.
 #[test]
 fn f32_tanh_matches_f64() {
