@@ -2,6 +2,8 @@
 //! ([`crate::backend::descriptors`]). A pass can hold several pipelines of the same shader that differ
 //! only in specialization constants.
 
+use std::sync::OnceLock;
+
 use ash::vk;
 
 use crate::backend::context::Context;
@@ -36,10 +38,22 @@ pub fn tile_block(area: vk::Rect2D, tile: u32) -> ([u32; 2], vk::Extent2D) {
 
 pub struct ComputePass {
     pipelines: Vec<vk::Pipeline>,
+    /// Pipelines made when a frame first needs them ([`ComputePass::defer`]).
+    deferred: Option<Deferred>,
     pub layout: vk::PipelineLayout,
     set: Option<BoundSet>,
     /// Local workgroup size in x and y, as declared by the shader.
     workgroup: (u32, u32),
+}
+
+/// Pipelines of a pass that wait, with their shader, until [`ComputePass::make_deferred`].
+/// On lavapipe each specialized pipeline costs start-up time and memory (about 2 MB), so a
+/// set that few frames use is better made when the first one does.
+struct Deferred {
+    name: String,
+    spirv: Vec<u32>,
+    specializations: Vec<Specialization>,
+    made: OnceLock<Vec<vk::Pipeline>>,
 }
 
 impl ComputePass {
@@ -71,8 +85,13 @@ impl ComputePass {
     ) -> Result<Self> {
         let device = &ctx.device;
         // Made step by step; a failed step destroys what was made (null handles are skipped).
-        let mut pass =
-            ctx.guard(ComputePass { pipelines: Vec::new(), layout: vk::PipelineLayout::null(), set: None, workgroup });
+        let mut pass = ctx.guard(ComputePass {
+            pipelines: Vec::new(),
+            deferred: None,
+            layout: vk::PipelineLayout::null(),
+            set: None,
+            workgroup,
+        });
         let set = pass.set.insert(BoundSet::new(ctx, name, bindings, vk::ShaderStageFlags::COMPUTE)?);
         let set_layouts = [set.layout];
         let push =
@@ -84,19 +103,35 @@ impl ComputePass {
         // SAFETY: the create info outlives the call; `destroy` destroys the layout.
         pass.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
 
-        ctx.step("vkCreateComputePipelines")?;
-        let module = ctx.create_shader_module(spirv)?;
-        // SAFETY: the module and the layout belong to this device.
-        let pipelines = unsafe { create_pipelines(device, module, pass.layout, specializations) };
-        ctx.destroy_shader_module(module);
-        pass.pipelines = pipelines?;
-
-        for (i, &pipeline) in pass.pipelines.iter().enumerate() {
-            let label = if pass.pipelines.len() > 1 { format!("{name} #{i}") } else { name.to_string() };
-            ctx.set_name(pipeline, &label);
-        }
+        pass.pipelines = make_pipelines(ctx, name, spirv, pass.layout, specializations, 0)?;
         ctx.set_name(pass.layout, name);
         Ok(pass.keep())
+    }
+
+    /// Adds pipelines of `spirv`, one per entry of `specializations`, that are made only by
+    /// [`ComputePass::make_deferred`]. They follow the pass's own in
+    /// [`ComputePass::record_pipeline`]'s numbering. `spirv` must match the pass's layout.
+    pub fn defer(&mut self, name: &str, spirv: &[u32], specializations: Vec<Specialization>) {
+        self.deferred =
+            Some(Deferred { name: name.to_string(), spirv: spirv.to_vec(), specializations, made: OnceLock::new() });
+    }
+
+    /// Makes the deferred pipelines unless they are made already. Returns whether it made
+    /// them now.
+    pub fn make_deferred(&self, ctx: &Context) -> Result<bool> {
+        let Some(deferred) = self.deferred.as_ref().filter(|d| d.made.get().is_none()) else {
+            return Ok(false);
+        };
+        let first = self.pipelines.len();
+        let made = make_pipelines(ctx, &deferred.name, &deferred.spirv, self.layout, &deferred.specializations, first)?;
+        if let Err(made) = deferred.made.set(made) {
+            // Made on another thread meanwhile: these were never used.
+            for pipeline in made {
+                // SAFETY: the pipelines belong to this device and were never used.
+                unsafe { ctx.device.destroy_pipeline(pipeline, None) };
+            }
+        }
+        Ok(true)
     }
 
     /// Points the descriptor set at other resources of the same kinds and order (after a
@@ -122,9 +157,16 @@ impl ComputePass {
         dispatch: Dispatch,
     ) {
         let device = &ctx.device;
+        let pipeline = match index.checked_sub(self.pipelines.len()) {
+            None => self.pipelines[index],
+            Some(later) => {
+                let made = self.deferred.as_ref().and_then(|d| d.made.get());
+                made.expect("deferred pipelines are made before a frame records them")[later]
+            }
+        };
         // SAFETY: `cmd` is recording, outside a render pass; the pipeline, layout, set and
         // buffers belong to this device and outlive the frame (true of the blocks below too).
-        unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipelines[index]) };
+        unsafe { device.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, pipeline) };
         if let Some(set) = self.set.as_ref().filter(|s| s.set != vk::DescriptorSet::null()) {
             let sets = [set.set];
             // SAFETY: as above; the set matches the layout's set 0.
@@ -156,13 +198,38 @@ impl Destroy for ComputePass {
         // SAFETY: the caller has finished all GPU work that uses the pass; null handles (of a
         // pass only partly made) are ignored by the destroy calls.
         unsafe {
-            for pipeline in self.pipelines {
+            let deferred = self.deferred.and_then(|d| d.made.into_inner()).unwrap_or_default();
+            for pipeline in self.pipelines.into_iter().chain(deferred) {
                 device.destroy_pipeline(pipeline, None);
             }
             device.destroy_pipeline_layout(self.layout, None);
         }
         self.set.destroy(ctx);
     }
+}
+
+/// The pipelines of `spirv` for `specializations`, labelled `name #i` from `i = first` (just
+/// `name` for a pass's only pipeline).
+fn make_pipelines(
+    ctx: &Context,
+    name: &str,
+    spirv: &[u32],
+    layout: vk::PipelineLayout,
+    specializations: &[Specialization],
+    first: usize,
+) -> Result<Vec<vk::Pipeline>> {
+    ctx.step("vkCreateComputePipelines")?;
+    let module = ctx.create_shader_module(spirv)?;
+    // SAFETY: the module and the layout belong to this device.
+    let pipelines = unsafe { create_pipelines(&ctx.device, module, layout, specializations) };
+    ctx.destroy_shader_module(module);
+    let pipelines = pipelines?;
+    for (i, &pipeline) in pipelines.iter().enumerate() {
+        let label =
+            if first == 0 && pipelines.len() == 1 { name.to_string() } else { format!("{name} #{}", first + i) };
+        ctx.set_name(pipeline, &label);
+    }
+    Ok(pipelines)
 }
 
 /// One pipeline per specialization, spread over the CPU's cores. On failure, destroys the

@@ -407,7 +407,7 @@ impl NetworkPass {
         let mut passes = vec![upload];
         match &self.kind {
             Kind::Storage(s) => passes.push(s.pass(frame)),
-            Kind::Specialized(s) => passes.extend(s.passes(frame, mesh)),
+            Kind::Specialized(s) => passes.extend(s.passes(frame, mesh)?),
         }
         Ok(passes)
     }

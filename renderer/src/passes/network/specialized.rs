@@ -80,7 +80,9 @@ struct ClassifyPush {
 /// The specialized variants' pipelines: the tile classification, then two per unit.
 pub(super) struct Specialized {
     classify: ComputePass,
-    /// Two pipelines per unit, in unit order: for frames of one light, then of several.
+    /// A pipeline per unit for frames of one light, in unit order, then deferred, one per
+    /// unit for frames of several lights: made when a frame first has two (half of the
+    /// pass's start-up time and memory on lavapipe, for what most frames never use).
     networks: ComputePass,
     unit_count: u32,
     tiled: bool,
@@ -180,8 +182,8 @@ impl Specialized {
             )));
         }
         let analytic = matches!(direct, DirectLight::Analytic { .. });
-        let specializations: Vec<Specialization> =
-            (0..units.len()).flat_map(|index| specializations(objects, units, index, tiled, analytic)).collect();
+        let (one_light, several_lights): (Vec<Specialization>, Vec<Specialization>) =
+            (0..units.len()).map(|index| specializations(objects, units, index, tiled, analytic).into()).unzip();
         let blended = units.iter().any(NetworkUnit::blends);
         if blended && matches!(written, Written::Display(_)) {
             return Err(Error::Invalid("blending network units write radiance images, not a display image".into()));
@@ -220,15 +222,16 @@ impl Specialized {
             }
         });
         let bindings = specialized_bindings(gbuffer, shared, &tiles, written, &direct);
-        let networks = ComputePass::specialized(
+        let mut networks = ComputePass::specialized(
             ctx,
             "network (specialization constants)",
             specialized_spirv,
             &bindings,
             std::mem::size_of::<SpecializedPush>() as u32,
             (TILE, TILE),
-            &specializations,
+            &one_light,
         )?;
+        networks.defer("network (specialization constants, several lights)", specialized_spirv, several_lights);
         Ok(Specialized {
             classify: classify.keep(),
             networks,
@@ -246,9 +249,12 @@ impl Specialized {
     /// The frame's steps: reset the indirect dispatches, draw the shadow maps (analytic
     /// direct light), sort the tiles by unit, then each unit's pipeline; blending units each
     /// in a pass of their own, as they add to what the units before them wrote.
-    pub(super) fn passes<'a>(&'a self, frame: FrameUses<'a>, mesh: &'a GBufferMesh) -> Vec<Pass<'a>> {
+    pub(super) fn passes<'a>(&'a self, frame: FrameUses<'a>, mesh: &'a GBufferMesh) -> Result<Vec<Pass<'a>>> {
         let g = frame.gbuffer_reads();
         let FrameUses { ctx, extent, constants: c, objects, materials, lights, units, writes, .. } = frame;
+        if c.light_count > 1 {
+            self.networks.make_deferred(ctx)?;
+        }
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let mut passes = Vec::new();
         if !self.dispatch_reset.is_empty() {
@@ -312,7 +318,7 @@ impl Specialized {
                 (0..self.unit_count as usize).for_each(|unit| self.record_unit(ctx, cmd, extent, &c, &push, unit))
             }));
         }
-        passes
+        Ok(passes)
     }
 
     /// Tile lists for the pass's units at `extent`, and their capacity.
@@ -383,12 +389,12 @@ impl Specialized {
         push: &SpecializedPush,
         index: usize,
     ) {
-        let several = usize::from(c.light_count > 1);
+        let pipeline = if c.light_count > 1 { self.unit_count as usize + index } else { index };
         let dispatch = if self.tiled {
             Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * index as u64 }
         } else {
             Dispatch::Covering { width: extent.width, height: extent.height }
         };
-        self.networks.record_pipeline(ctx, cmd, 2 * index + several, bytemuck::bytes_of(push), dispatch);
+        self.networks.record_pipeline(ctx, cmd, pipeline, bytemuck::bytes_of(push), dispatch);
     }
 }
