@@ -84,6 +84,11 @@ fn scripted_window_run_is_clean_and_matches_render() {
     let stats: serde_json::Value = serde_json::from_slice(&run.stdout).expect("--stats prints one JSON line");
     assert_eq!(stats["frames"], 31, "0.5 s of script time at 60 frames per second, plus the last frame");
     assert!(stats["gpu_ms"]["network_ms"].as_f64().unwrap() > 0.0);
+    let startup = &stats["start_s"];
+    let phases = ["scene_and_model", "vulkan", "frame_set_up", "first_frame"].map(|k| startup[k].as_f64().unwrap());
+    let total = startup["total"].as_f64().unwrap();
+    assert!((phases.iter().sum::<f64>() - total).abs() < 1e-6 && phases[2] > 0.0, "start-up {startup}");
+    assert!(stderr.contains("start-up ") && stderr.contains("first frame"), "{stderr}");
 
     let camera = format!("{eye}:{target}");
     assert_eq!(load(&shot).dimensions(), (200, 150), "the screenshot has the size the script asked for");

@@ -14,6 +14,7 @@ use crate::parse::parse_size;
 use crate::viewer::controls::HELP_TEXT;
 use crate::viewer::gpu::ViewerGpu;
 use crate::viewer::script::Script;
+use crate::viewer::startup::StartUp;
 use crate::viewer::state::ViewerState;
 use crate::viewer::{run_headless, window, RunPlan, Session};
 
@@ -69,8 +70,8 @@ pub struct ViewArgs {
     /// Play a script of timed events (format below), then exit.
     #[arg(long, value_name = "FILE")]
     pub script: Option<PathBuf>,
-    /// At exit, print frames, median and 99th-percentile frame time, GPU milliseconds per pass
-    /// and peak memory, as one line of JSON on stdout.
+    /// At exit, print frames, median and 99th-percentile frame time, GPU milliseconds per pass,
+    /// peak memory and start-up seconds per phase, as one line of JSON on stdout.
     #[arg(long)]
     pub stats: bool,
     /// Start with the overlay hidden (O toggles it).
@@ -107,6 +108,7 @@ without a window; with neither --frames nor --script, one frame is saved to --sc
 (default view.png).";
 
 pub fn run(args: &ViewArgs) -> Result<()> {
+    let mut startup = StartUp::new();
     let size = parse_size(&args.size)?;
     let script = args.script.as_deref().map(Script::load).transpose()?;
     if let Some(path) = &args.screenshot {
@@ -115,6 +117,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         }
     }
     let (scene, model) = args.input.load()?;
+    startup.phase("scene and model");
     let view = named_view(&scene, args.view.as_deref())?;
     let lights = crate::lights::lights_from_args(&scene, &args.light)?;
     let direct = args.input.direct.resolve(&scene, Some(args.variant.0));
@@ -161,17 +164,12 @@ pub fn run(args: &ViewArgs) -> Result<()> {
         options.device_extensions = swapchain::DEVICE_EXTENSIONS.to_vec();
     }
     let ctx = Context::new(&options).context("cannot start Vulkan (`rrf info` says more)")?;
+    startup.phase("Vulkan");
     let extent = vk::Extent2D { width: size.0, height: size.1 };
-    let started = std::time::Instant::now();
+    eprintln!("{} on {} ({} network pass)", scene.name, ctx.info.name, args.variant.0.name());
     let mut gpu = ViewerGpu::new(ctx, &scene, &model, (args.variant.0, direct), extent)?;
-    eprintln!(
-        "{} on {} ({} network pass, pipelines ready in {:.1} s)",
-        scene.name,
-        gpu.ctx.info.name,
-        args.variant.0.name(),
-        started.elapsed().as_secs_f64()
-    );
-    let mut session = Session::new(state, plan);
+    startup.phase("frame set-up");
+    let mut session = Session::new(state, plan, startup);
     let ran = match event_loop {
         Some(event_loop) => {
             let title = format!("rrf view: {}", scene.name);

@@ -70,6 +70,12 @@ impl ViewerGpu {
         Ok(frame.gpu.resize(ctx, extent)?)
     }
 
+    /// Waits until every frame drawn so far has finished.
+    pub fn wait_idle(&mut self) -> Result<()> {
+        let (ctx, _, ring) = self.parts();
+        Ok(ring.wait_all(ctx)?)
+    }
+
     /// Screenshots written since the last call, or the errors that stopped them.
     pub fn take_saved(&self) -> Vec<Result<PathBuf>> {
         std::mem::take(&mut self.saved.borrow_mut())

@@ -4,6 +4,7 @@
 pub mod controls;
 pub mod gpu;
 pub mod script;
+pub mod startup;
 pub mod state;
 pub mod window;
 
@@ -17,6 +18,7 @@ use crate::frame_stats::Stats;
 use gpu::ViewerGpu;
 use rrf_renderer::backend::present::Presenter;
 use script::{Action, Script, FRAME_SECONDS};
+use startup::StartUp;
 use state::{Held, ViewerState};
 
 /// How a run ends and what it saves.
@@ -69,10 +71,12 @@ pub struct Session {
     /// A screenshot asked for by a key, taken with the next frame.
     pending_screenshot: Option<PathBuf>,
     screenshots_taken: u32,
+    /// Start-up so far; the first frame ends it.
+    startup: StartUp,
 }
 
 impl Session {
-    pub fn new(state: ViewerState, plan: RunPlan) -> Self {
+    pub fn new(state: ViewerState, plan: RunPlan, startup: StartUp) -> Self {
         Session {
             state,
             stats: Stats::default(),
@@ -82,6 +86,7 @@ impl Session {
             last_tick: None,
             pending_screenshot: None,
             screenshots_taken: 0,
+            startup,
         }
     }
 
@@ -130,6 +135,12 @@ impl Session {
             screenshots.push(path.clone());
         }
         gpu.draw(&self.state, &mut self.stats, presenter, overlay_scale, screenshots)?;
+        if self.frame == 0 {
+            // Once: start-up ends when the first frame is finished, not when it is submitted.
+            gpu.wait_idle()?;
+            self.startup.phase("first frame");
+            eprintln!("{}", self.startup.line());
+        }
         self.frame += 1;
         report_saved(gpu)?;
         requests.quit |= last;
@@ -143,7 +154,9 @@ impl Session {
 
     /// The `--stats` summary.
     pub fn summary(&self) -> serde_json::Value {
-        self.stats.summary(self.frame)
+        let mut summary = self.stats.summary(self.frame);
+        summary["start_s"] = self.startup.json();
+        summary
     }
 }
 
