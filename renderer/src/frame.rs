@@ -371,7 +371,9 @@ impl Frame {
         let c = constants;
         let mirror_eyes: Vec<[f32; 4]> = c.mirrors.iter().map(|m| m.gbuffer.eye).collect();
         let network = NetworkConstants::new(c.gbuffer.eye, &c.lights, &mirror_eyes, c.exposure_scale, c.shown.code())?;
-        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display)?);
+        let views: Vec<GBufferConstants> =
+            std::iter::once(c.gbuffer).chain(c.mirrors.iter().map(|m| m.gbuffer)).collect();
+        passes.extend(self.network.passes(ctx, &self.targets, &self.mesh, network, display, &views)?);
         stamp(&mut passes, 3);
         if let Some(outputs) = self.network.outputs() {
             let (tonemap, hdr) = match constants.shown {

@@ -38,7 +38,7 @@ pub fn tile_block(area: vk::Rect2D, tile: u32) -> ([u32; 2], vk::Extent2D) {
 
 pub struct ComputePass {
     pipelines: Vec<vk::Pipeline>,
-    /// Pipelines made when a frame first needs them ([`ComputePass::defer`]).
+    /// Pipelines made when a frame first needs them ([`ComputePass::deferred`]).
     deferred: Option<Deferred>,
     pub layout: vk::PipelineLayout,
     set: Option<BoundSet>,
@@ -46,14 +46,15 @@ pub struct ComputePass {
     workgroup: (u32, u32),
 }
 
-/// Pipelines of a pass that wait, with their shader, until [`ComputePass::make_deferred`].
-/// On lavapipe each specialized pipeline costs start-up time and memory (about 2 MB), so a
-/// set that few frames use is better made when the first one does.
+/// Pipelines of a pass that wait, with their shader, until [`ComputePass::make_deferred`]
+/// makes them, each when a frame first needs it. On lavapipe each specialized pipeline costs
+/// start-up time and memory (about 2 MB), so a pass with hundreds is better made a few at a
+/// time, as frames need them.
 struct Deferred {
     name: String,
     spirv: Vec<u32>,
     specializations: Vec<Specialization>,
-    made: OnceLock<Vec<vk::Pipeline>>,
+    made: Vec<OnceLock<vk::Pipeline>>,
 }
 
 impl ComputePass {
@@ -103,35 +104,58 @@ impl ComputePass {
         // SAFETY: the create info outlives the call; `destroy` destroys the layout.
         pass.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
 
-        pass.pipelines = make_pipelines(ctx, name, spirv, pass.layout, specializations, 0)?;
+        if !specializations.is_empty() {
+            let numbers: Vec<usize> = (0..specializations.len()).collect();
+            pass.pipelines = make_pipelines(ctx, name, spirv, pass.layout, specializations, &numbers)?;
+        }
         ctx.set_name(pass.layout, name);
         Ok(pass.keep())
     }
 
-    /// Adds pipelines of `spirv`, one per entry of `specializations`, that are made only by
-    /// [`ComputePass::make_deferred`]. They follow the pass's own in
-    /// [`ComputePass::record_pipeline`]'s numbering. `spirv` must match the pass's layout.
-    pub fn defer(&mut self, name: &str, spirv: &[u32], specializations: Vec<Specialization>) {
-        self.deferred =
-            Some(Deferred { name: name.to_string(), spirv: spirv.to_vec(), specializations, made: OnceLock::new() });
+    /// Like [`ComputePass::specialized`], but no pipeline is made here:
+    /// [`ComputePass::make_deferred`] makes each when a frame first needs it.
+    pub fn deferred(
+        ctx: &Context,
+        name: &str,
+        spirv: &[u32],
+        bindings: &[Bind<'_>],
+        push_bytes: u32,
+        workgroup: (u32, u32),
+        specializations: Vec<Specialization>,
+    ) -> Result<Self> {
+        let mut pass = Self::specialized(ctx, name, spirv, bindings, push_bytes, workgroup, &[])?;
+        let made = specializations.iter().map(|_| OnceLock::new()).collect();
+        pass.deferred = Some(Deferred { name: name.to_string(), spirv: spirv.to_vec(), specializations, made });
+        Ok(pass)
     }
 
-    /// Makes the deferred pipelines unless they are made already. Returns whether it made
-    /// them now.
-    pub fn make_deferred(&self, ctx: &Context) -> Result<bool> {
-        let Some(deferred) = self.deferred.as_ref().filter(|d| d.made.get().is_none()) else {
-            return Ok(false);
-        };
+    /// Makes the deferred pipelines of `indices` (in [`ComputePass::record_pipeline`]'s
+    /// numbering) that are not made yet, on all CPU cores. Returns how many it made.
+    pub fn make_deferred(&self, ctx: &Context, indices: impl IntoIterator<Item = usize>) -> Result<usize> {
+        let Some(deferred) = &self.deferred else { return Ok(0) };
         let first = self.pipelines.len();
-        let made = make_pipelines(ctx, &deferred.name, &deferred.spirv, self.layout, &deferred.specializations, first)?;
-        if let Err(made) = deferred.made.set(made) {
-            // Made on another thread meanwhile: these were never used.
-            for pipeline in made {
-                // SAFETY: the pipelines belong to this device and were never used.
+        let mut missing: Vec<usize> = indices
+            .into_iter()
+            .map(|index| index.checked_sub(first).expect("a deferred pipeline's index"))
+            .filter(|&later| deferred.made[later].get().is_none())
+            .collect();
+        missing.sort_unstable();
+        missing.dedup();
+        if missing.is_empty() {
+            return Ok(0);
+        }
+        let specializations: Vec<Specialization> =
+            missing.iter().map(|&later| deferred.specializations[later].clone()).collect();
+        let numbers: Vec<usize> = missing.iter().map(|later| first + later).collect();
+        let made = make_pipelines(ctx, &deferred.name, &deferred.spirv, self.layout, &specializations, &numbers)?;
+        for (&later, pipeline) in missing.iter().zip(made) {
+            if deferred.made[later].set(pipeline).is_err() {
+                // Made on another thread meanwhile: this one was never used.
+                // SAFETY: the pipeline belongs to this device and was never used.
                 unsafe { ctx.device.destroy_pipeline(pipeline, None) };
             }
         }
-        Ok(true)
+        Ok(missing.len())
     }
 
     /// Points the descriptor set at other resources of the same kinds and order (after a
@@ -160,8 +184,8 @@ impl ComputePass {
         let pipeline = match index.checked_sub(self.pipelines.len()) {
             None => self.pipelines[index],
             Some(later) => {
-                let made = self.deferred.as_ref().and_then(|d| d.made.get());
-                made.expect("deferred pipelines are made before a frame records them")[later]
+                let made = self.deferred.as_ref().and_then(|d| d.made[later].get());
+                *made.expect("a deferred pipeline is made before a frame records it")
             }
         };
         // SAFETY: `cmd` is recording, outside a render pass; the pipeline, layout, set and
@@ -198,7 +222,7 @@ impl Destroy for ComputePass {
         // SAFETY: the caller has finished all GPU work that uses the pass; null handles (of a
         // pass only partly made) are ignored by the destroy calls.
         unsafe {
-            let deferred = self.deferred.and_then(|d| d.made.into_inner()).unwrap_or_default();
+            let deferred = self.deferred.into_iter().flat_map(|d| d.made).filter_map(OnceLock::into_inner);
             for pipeline in self.pipelines.into_iter().chain(deferred) {
                 device.destroy_pipeline(pipeline, None);
             }
@@ -208,15 +232,15 @@ impl Destroy for ComputePass {
     }
 }
 
-/// The pipelines of `spirv` for `specializations`, labelled `name #i` from `i = first` (just
-/// `name` for a pass's only pipeline).
+/// The pipelines of `spirv` for `specializations`, labelled `name #n` with their `numbers`
+/// in the pass (just `name` for a pass's only pipeline).
 fn make_pipelines(
     ctx: &Context,
     name: &str,
     spirv: &[u32],
     layout: vk::PipelineLayout,
     specializations: &[Specialization],
-    first: usize,
+    numbers: &[usize],
 ) -> Result<Vec<vk::Pipeline>> {
     ctx.step("vkCreateComputePipelines")?;
     let module = ctx.create_shader_module(spirv)?;
@@ -224,9 +248,8 @@ fn make_pipelines(
     let pipelines = unsafe { create_pipelines(&ctx.device, module, layout, specializations) };
     ctx.destroy_shader_module(module);
     let pipelines = pipelines?;
-    for (i, &pipeline) in pipelines.iter().enumerate() {
-        let label =
-            if first == 0 && pipelines.len() == 1 { name.to_string() } else { format!("{name} #{}", first + i) };
+    for (&pipeline, &number) in pipelines.iter().zip(numbers) {
+        let label = if numbers == [0] { name.to_string() } else { format!("{name} #{number}") };
         ctx.set_name(pipeline, &label);
     }
     Ok(pipelines)

@@ -117,6 +117,23 @@ impl Draw {
 }
 
 impl GBufferMesh {
+    /// Each object's bounds, by object id: `None` for an object without triangles.
+    pub(crate) fn object_bounds(&self) -> Vec<Option<([f32; 3], [f32; 3])>> {
+        let mut bounds: Vec<Option<([f32; 3], [f32; 3])>> = Vec::new();
+        for draw in &self.draws {
+            let object = draw.object as usize;
+            if bounds.len() <= object {
+                bounds.resize(object + 1, None);
+            }
+            let (min, max) = bounds[object].get_or_insert((draw.min, draw.max));
+            for axis in 0..3 {
+                min[axis] = min[axis].min(draw.min[axis]);
+                max[axis] = max[axis].max(draw.max[axis]);
+            }
+        }
+        bounds
+    }
+
     /// The mesh of `vertices` and the triangles that `indices` (three per triangle) make of
     /// them, with `materials` whose textures index into `texels`. Shared vertices are shaded
     /// once where the driver caches them.

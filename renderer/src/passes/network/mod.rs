@@ -34,7 +34,7 @@ use crate::backend::resources::{Buffer, Image};
 use crate::backend::sync::{Access, Pass, ResourceStates, Use};
 use crate::error::{Error, Result};
 use crate::lights::{NetworkLight, PointLightShape, MAX_LIGHTS};
-use crate::passes::gbuffer::{self, GBufferTargets};
+use crate::passes::gbuffer::{self, GBufferConstants, GBufferTargets};
 use crate::passes::mesh::GBufferMesh;
 use specialized::Specialized;
 use storage::Storage;
@@ -374,7 +374,10 @@ impl NetworkPass {
 
     /// The pass's steps for a frame list. The G-buffer (and for a display pass, `display`)
     /// must be the ones the pass was made or last resized for; `mesh` is the scene the
-    /// G-buffer drew, which analytic direct light draws into its shadow maps.
+    /// G-buffer drew, which analytic direct light draws into its shadow maps, and `views`
+    /// are the frame's G-buffer passes (its own, then its mirrors'): the specialized
+    /// variants shade only the network units that can show in them, and make their
+    /// pipelines when a frame first does.
     pub fn passes<'a>(
         &'a self,
         ctx: &'a Context,
@@ -382,6 +385,7 @@ impl NetworkPass {
         mesh: &'a GBufferMesh,
         c: NetworkConstants,
         display: Option<&'a Image>,
+        views: &[GBufferConstants],
     ) -> Result<Vec<Pass<'a>>> {
         let writes: Vec<Use> = Written::of(&self.outputs, display)?
             .images()
@@ -407,7 +411,7 @@ impl NetworkPass {
         let mut passes = vec![upload];
         match &self.kind {
             Kind::Storage(s) => passes.push(s.pass(frame)),
-            Kind::Specialized(s) => passes.extend(s.passes(frame, mesh)?),
+            Kind::Specialized(s) => passes.extend(s.passes(frame, mesh, views)?),
         }
         Ok(passes)
     }

@@ -16,9 +16,48 @@ use crate::backend::resources::{Buffer, Image};
 use crate::backend::sync::{Access, Pass, ResourceStates, Use};
 use crate::error::{Error, Result};
 use crate::lights::{PointLightShape, Spot};
-use crate::passes::gbuffer::GBufferTargets;
+use crate::passes::gbuffer::{box_in_view, GBufferConstants, GBufferTargets};
 use crate::passes::mesh::GBufferMesh;
 use crate::passes::shadow::ShadowPass;
+
+/// Where a network unit's weight may be above 0: its object, and a box in world space.
+struct UnitSupport {
+    object: usize,
+    min: [f32; 3],
+    max: [f32; 3],
+}
+
+impl UnitSupport {
+    fn of(unit: &NetworkUnit) -> Self {
+        let (d, i) = (unit.direct.blend, unit.indirect.blend);
+        UnitSupport {
+            object: unit.object,
+            min: std::array::from_fn(|a| (d.min[a] - d.min_band[a]).max(i.min[a] - i.min_band[a])),
+            max: std::array::from_fn(|a| (d.max[a] + d.max_band[a]).min(i.max[a] + i.max_band[a])),
+        }
+    }
+}
+
+/// The units, in order, whose support may show in one of `views`: where it meets its
+/// object's `bounds` (by object id; `None` for no triangles), it is in the view. The moving
+/// light's object is drawn moved, so its units always count.
+fn units_in_view(
+    supports: &[UnitSupport],
+    bounds: &[Option<([f32; 3], [f32; 3])>],
+    views: &[GBufferConstants],
+) -> Vec<usize> {
+    let moving = views.first().map_or(0, |v| v.light_object) as usize;
+    let in_view = |s: &UnitSupport| {
+        if s.object + 1 == moving {
+            return true;
+        }
+        let Some((low, high)) = bounds.get(s.object).copied().flatten() else { return false };
+        let min: [f32; 3] = std::array::from_fn(|a| s.min[a].max(low[a]));
+        let max: [f32; 3] = std::array::from_fn(|a| s.max[a].min(high[a]));
+        (0..3).all(|a| min[a] <= max[a]) && views.iter().any(|v| box_in_view(&v.view_projection, min, max))
+    };
+    (0..supports.len()).filter(|&unit| in_view(&supports[unit])).collect()
+}
 
 /// The most units `network_classify.comp` tells apart.
 const MAX_UNITS: usize = 1024;
@@ -80,10 +119,14 @@ struct ClassifyPush {
 /// The specialized variants' pipelines: the tile classification, then two per unit.
 pub(super) struct Specialized {
     classify: ComputePass,
-    /// A pipeline per unit for frames of one light, in unit order, then deferred, one per
-    /// unit for frames of several lights: made when a frame first has two (half of the
-    /// pass's start-up time and memory on lavapipe, for what most frames never use).
+    /// A pipeline per unit for frames of one light, in unit order, then one per unit for
+    /// frames of several. Each is made when a frame first shows its unit (on lavapipe each
+    /// costs start-up time and about 2 MB), so the several-light set waits for a frame with
+    /// two lights, and units out of view wait until they come into it.
     networks: ComputePass,
+    /// Each unit's object and the box outside which its weight is 0 (its two leaves' blend
+    /// boxes, bands included, intersected).
+    supports: Vec<UnitSupport>,
     unit_count: u32,
     tiled: bool,
     /// A `VkDispatchIndirectCommand` per unit.
@@ -222,19 +265,19 @@ impl Specialized {
             }
         });
         let bindings = specialized_bindings(gbuffer, shared, &tiles, written, &direct);
-        let mut networks = ComputePass::specialized(
+        let networks = ComputePass::deferred(
             ctx,
             "network (specialization constants)",
             specialized_spirv,
             &bindings,
             std::mem::size_of::<SpecializedPush>() as u32,
             (TILE, TILE),
-            &one_light,
+            one_light.into_iter().chain(several_lights).collect(),
         )?;
-        networks.defer("network (specialization constants, several lights)", specialized_spirv, several_lights);
         Ok(Specialized {
             classify: classify.keep(),
             networks,
+            supports: units.iter().map(UnitSupport::of).collect(),
             unit_count: units.len() as u32,
             tiled,
             dispatch: dispatch.keep(),
@@ -249,12 +292,21 @@ impl Specialized {
     /// The frame's steps: reset the indirect dispatches, draw the shadow maps (analytic
     /// direct light), sort the tiles by unit, then each unit's pipeline; blending units each
     /// in a pass of their own, as they add to what the units before them wrote.
-    pub(super) fn passes<'a>(&'a self, frame: FrameUses<'a>, mesh: &'a GBufferMesh) -> Result<Vec<Pass<'a>>> {
+    ///
+    /// Only the units that may show in one of `views` (the frame's G-buffer passes) are
+    /// dispatched, after their pipelines are made if this is the first frame to show them:
+    /// the others have no pixels, so the tile classification lists none for them.
+    pub(super) fn passes<'a>(
+        &'a self,
+        frame: FrameUses<'a>,
+        mesh: &'a GBufferMesh,
+        views: &[GBufferConstants],
+    ) -> Result<Vec<Pass<'a>>> {
         let g = frame.gbuffer_reads();
         let FrameUses { ctx, extent, constants: c, objects, materials, lights, units, writes, .. } = frame;
-        if c.light_count > 1 {
-            self.networks.make_deferred(ctx)?;
-        }
+        let shown = units_in_view(&self.supports, &mesh.object_bounds(), views);
+        let set = if c.light_count > 1 { self.unit_count as usize } else { 0 };
+        self.networks.make_deferred(ctx, shown.iter().map(|&unit| set + unit))?;
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let mut passes = Vec::new();
         if !self.dispatch_reset.is_empty() {
@@ -308,14 +360,14 @@ impl Specialized {
         uses.extend(writes.iter().map(|w| Use { access: written, ..*w }));
         let push = self.push(&c);
         if self.blended {
-            for unit in 0..self.unit_count as usize {
+            for unit in shown {
                 passes.push(Pass::new("network unit (blended)", uses.clone(), move |cmd| {
                     self.record_unit(ctx, cmd, extent, &c, &push, unit)
                 }));
             }
         } else {
             passes.push(Pass::new("network (specialization constants)", uses, move |cmd| {
-                (0..self.unit_count as usize).for_each(|unit| self.record_unit(ctx, cmd, extent, &c, &push, unit))
+                shown.iter().for_each(|&unit| self.record_unit(ctx, cmd, extent, &c, &push, unit))
             }));
         }
         Ok(passes)
@@ -396,5 +448,71 @@ impl Specialized {
             Dispatch::Covering { width: extent.width, height: extent.height }
         };
         self.networks.record_pipeline(ctx, cmd, pipeline, bytemuck::bytes_of(push), dispatch);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::passes::network::{LeafBlend, NetworkWeights};
+
+    /// The view of the clip volume itself (x and y from -1 to 1, z from 0 to 1), moved by
+    /// `x` along x, with object id + 1 `light_object` the moving light's.
+    fn view(x: f32, light_object: u32) -> GBufferConstants {
+        let mut view_projection = [[0.0; 4]; 4];
+        for (i, column) in view_projection.iter_mut().enumerate() {
+            column[i] = 1.0;
+        }
+        view_projection[3][0] = -x;
+        GBufferConstants {
+            view_projection,
+            eye: [0.0; 4],
+            light_offset: [0.0; 4],
+            light_scale: [1.0; 4],
+            light_object,
+            pad: [0; 3],
+        }
+    }
+
+    fn support(object: usize, from_x: f32, to_x: f32) -> UnitSupport {
+        UnitSupport { object, min: [from_x, -f32::MAX, -f32::MAX], max: [to_x, f32::MAX, f32::MAX] }
+    }
+
+    #[test]
+    fn a_units_support_is_its_leaves_boxes_with_their_bands() {
+        let weights = |blend| NetworkWeights {
+            params: &[],
+            input_min: [0.0; 13],
+            input_max: [1.0; 13],
+            output_scale: 1.0,
+            blend,
+        };
+        let below = LeafBlend { max: [1.0, f32::MAX, f32::MAX], max_band: [0.1, 0.0, 0.0], ..LeafBlend::WHOLE };
+        let above = LeafBlend { min: [0.5, -f32::MAX, -f32::MAX], min_band: [0.05, 0.0, 0.0], ..LeafBlend::WHOLE };
+        let s = UnitSupport::of(&NetworkUnit { object: 3, direct: weights(below), indirect: weights(above) });
+        assert_eq!(s.object, 3);
+        assert_eq!((s.min[0], s.max[0]), (0.45, 1.1));
+        assert_eq!((s.min[1], s.max[1]), (-f32::MAX, f32::MAX));
+    }
+
+    #[test]
+    fn only_units_that_can_show_are_shaded() {
+        // Object 0 spans x from -3 to 3; its units split it at 1 and 2 (bands of 0.1).
+        // Object 1 has no triangles; object 2 is out of view but is the moving light.
+        let slab = ([-3.0, -0.5, 0.2], [3.0, 0.5, 0.8]);
+        let bounds = [Some(slab), None, Some(([7.0, 0.0, 0.5], [8.0, 0.1, 0.6]))];
+        let supports = [
+            support(0, -f32::MAX, 1.1),
+            support(0, 0.9, 2.1),
+            support(0, 1.9, f32::MAX),
+            support(1, -f32::MAX, f32::MAX),
+            support(2, -f32::MAX, f32::MAX),
+        ];
+        let camera = view(0.0, 0);
+        assert_eq!(units_in_view(&supports, &bounds, &[camera]), [0, 1], "x from -1 to 1 sees the first two");
+        // A mirror's view of x from 1.5 to 3.5 adds the third.
+        assert_eq!(units_in_view(&supports, &bounds, &[camera, view(2.5, 0)]), [0, 1, 2]);
+        assert_eq!(units_in_view(&supports, &bounds, &[view(-5.0, 0)]), [] as [usize; 0], "nothing in view");
+        assert_eq!(units_in_view(&supports, &bounds, &[view(-5.0, 3)]), [4], "the moving light is drawn moved");
     }
 }
