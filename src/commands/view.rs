@@ -108,7 +108,7 @@ without a window; with neither --frames nor --script, one frame is saved to --sc
 (default view.png).";
 
 pub fn run(args: &ViewArgs) -> Result<()> {
-    let mut startup = StartUp::new();
+    let mut startup = StartUp::start();
     let size = parse_size(&args.size)?;
     let script = args.script.as_deref().map(Script::load).transpose()?;
     if let Some(path) = &args.screenshot {

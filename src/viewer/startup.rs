@@ -15,7 +15,7 @@ pub struct StartUp {
 
 impl StartUp {
     /// Starts the clock.
-    pub fn new() -> Self {
+    pub fn start() -> Self {
         let now = Instant::now();
         StartUp { started: now, phases: Vec::new(), last: now }
     }
@@ -58,7 +58,7 @@ mod tests {
 
     #[test]
     fn phases_add_up_to_the_total() {
-        let mut s = StartUp::new();
+        let mut s = StartUp::start();
         std::thread::sleep(Duration::from_millis(5));
         s.phase("scene and model");
         s.phase("frame set-up");

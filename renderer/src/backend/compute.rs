@@ -39,7 +39,7 @@ pub fn tile_block(area: vk::Rect2D, tile: u32) -> ([u32; 2], vk::Extent2D) {
 pub struct ComputePass {
     pipelines: Vec<vk::Pipeline>,
     /// Pipelines made when a frame first needs them ([`ComputePass::deferred`]).
-    deferred: Option<Deferred>,
+    deferred: Option<Box<Deferred>>,
     pub layout: vk::PipelineLayout,
     set: Option<BoundSet>,
     /// Local workgroup size in x and y, as declared by the shader.
@@ -125,7 +125,8 @@ impl ComputePass {
     ) -> Result<Self> {
         let mut pass = Self::specialized(ctx, name, spirv, bindings, push_bytes, workgroup, &[])?;
         let made = specializations.iter().map(|_| OnceLock::new()).collect();
-        pass.deferred = Some(Deferred { name: name.to_string(), spirv: spirv.to_vec(), specializations, made });
+        pass.deferred =
+            Some(Box::new(Deferred { name: name.to_string(), spirv: spirv.to_vec(), specializations, made }));
         Ok(pass)
     }
 
