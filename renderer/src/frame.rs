@@ -230,6 +230,11 @@ impl Frame {
         states.set_layout(&self.ldr, vk::ImageLayout::GENERAL);
     }
 
+    /// The network pass's variant.
+    pub fn variant(&self) -> Variant {
+        self.network.variant()
+    }
+
     pub fn extent(&self) -> vk::Extent2D {
         self.targets.extent
     }

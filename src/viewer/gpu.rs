@@ -56,6 +56,10 @@ impl ViewerGpu {
         (&self.ctx, self.frame.as_mut().expect("live until finish"), self.ring.as_mut().expect("live until finish"))
     }
 
+    pub fn variant(&self) -> Variant {
+        self.frame.as_ref().expect("live until finish").gpu.variant()
+    }
+
     pub fn extent(&self) -> vk::Extent2D {
         self.frame.as_ref().expect("live until finish").gpu.extent()
     }

@@ -17,6 +17,7 @@ use anyhow::{Context as _, Result};
 use crate::frame_stats::Stats;
 use gpu::ViewerGpu;
 use rrf_renderer::backend::present::Presenter;
+use rrf_renderer::passes::network::Variant;
 use script::{Action, Script, FRAME_SECONDS};
 use startup::StartUp;
 use state::{Held, ViewerState};
@@ -73,6 +74,8 @@ pub struct Session {
     screenshots_taken: u32,
     /// Start-up so far; the first frame ends it.
     startup: StartUp,
+    /// Whether a frame with several lights was drawn.
+    drew_several_lights: bool,
 }
 
 impl Session {
@@ -87,6 +90,7 @@ impl Session {
             pending_screenshot: None,
             screenshots_taken: 0,
             startup,
+            drew_several_lights: false,
         }
     }
 
@@ -133,6 +137,13 @@ impl Session {
         let last = self.plan.last_frame().is_some_and(|n| self.frame + 1 >= n);
         if let (true, Some(path)) = (last, &self.plan.screenshot) {
             screenshots.push(path.clone());
+        }
+        if self.state.lights.len() > 1 && !std::mem::replace(&mut self.drew_several_lights, true) {
+            // The pause that follows would otherwise look like a hang (BENCHMARKS.md, "Start-up
+            // and memory").
+            if gpu.variant() != Variant::Storage {
+                eprintln!("first frame with several lights: making their network pipelines (once)");
+            }
         }
         gpu.draw(&self.state, &mut self.stats, presenter, overlay_scale, screenshots)?;
         if self.frame == 0 {
