@@ -1,7 +1,8 @@
 //! The specialized variants: one pipeline per unit with its weights as specialization
 //! constants (`network_specialized.comp`), after a pass that sorts the image's 8×8 tiles by
 //! unit (`network_classify.comp`). The per-object variant dispatches each pipeline over the
-//! whole image; the tiled one, indirectly over only its unit's tiles.
+//! whole image; the tiled one, indirectly over only its unit's tiles. Both dispatch only the
+//! units that can show in the frame, and make a unit's pipeline when a frame first does.
 
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
