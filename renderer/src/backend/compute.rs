@@ -105,7 +105,9 @@ impl ComputePass {
         pass.layout = unsafe { device.create_pipeline_layout(&layout_info, None) }.vk("vkCreatePipelineLayout")?;
 
         if !specializations.is_empty() {
-            let numbers: Vec<usize> = (0..specializations.len()).collect();
+            // A lone pipeline is labelled with the pass's name alone.
+            let numbers: Vec<usize> =
+                if specializations.len() > 1 { (0..specializations.len()).collect() } else { vec![] };
             pass.pipelines = make_pipelines(ctx, name, spirv, pass.layout, specializations, &numbers)?;
         }
         ctx.set_name(pass.layout, name);
@@ -234,7 +236,7 @@ impl Destroy for ComputePass {
 }
 
 /// The pipelines of `spirv` for `specializations`, labelled `name #n` with their `numbers`
-/// in the pass (just `name` for a pass's only pipeline).
+/// in the pass, or `name` where `numbers` has none.
 fn make_pipelines(
     ctx: &Context,
     name: &str,
@@ -249,8 +251,8 @@ fn make_pipelines(
     let pipelines = unsafe { create_pipelines(&ctx.device, module, layout, specializations) };
     ctx.destroy_shader_module(module);
     let pipelines = pipelines?;
-    for (&pipeline, &number) in pipelines.iter().zip(numbers) {
-        let label = if numbers == [0] { name.to_string() } else { format!("{name} #{number}") };
+    for (i, &pipeline) in pipelines.iter().enumerate() {
+        let label = numbers.get(i).map_or_else(|| name.to_string(), |n| format!("{name} #{n}"));
         ctx.set_name(pipeline, &label);
     }
     Ok(pipelines)
