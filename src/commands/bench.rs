@@ -175,9 +175,10 @@ impl Bench<'_> {
         // Listing the frame's passes makes the network pipelines that this view needs.
         let bytes_per_pixel = frame.gpu.bytes_per_pixel(ctx, &constants);
         let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
-        let measured = bytes_per_pixel.map_err(Into::into).and_then(|bytes| self.measure(&frame, &constants, bytes));
+        let measured =
+            bytes_per_pixel.map_err(Into::into).and_then(|bytes| Ok((bytes, self.measure(&frame, &constants)?)));
         frame.destroy(ctx);
-        let (bytes_per_pixel, stats, objects) = measured?;
+        let (bytes_per_pixel, (stats, objects)) = measured?;
         let [gbuffer, mirrors, network, tonemap, _rest] = &stats.gpu_ms;
         // Networks evaluated per frame: two per pixel of an object that has them.
         let trained: Vec<bool> = scene.objects.iter().map(|o| model.has(&o.name, Component::Direct)).collect();
@@ -217,16 +218,10 @@ impl Bench<'_> {
 }
 
 impl Bench<'_> {
-    /// `bytes_per_pixel` with the timings of frames of `constants` and the object ids of
-    /// their pixels.
-    fn measure(
-        &self,
-        frame: &SceneFrame,
-        constants: &FrameConstants,
-        bytes_per_pixel: u32,
-    ) -> Result<(u32, Stats, Vec<u32>)> {
+    /// The timings of frames of `constants`, and the object ids of their pixels.
+    fn measure(&self, frame: &SceneFrame, constants: &FrameConstants) -> Result<(Stats, Vec<u32>)> {
         let stats = self.time_frames(&frame.gpu, constants)?;
-        Ok((bytes_per_pixel, stats, frame.gpu.read_objects(self.ctx)?))
+        Ok((stats, frame.gpu.read_objects(self.ctx)?))
     }
 
     /// Runs warm-up and timed frames with [`FRAMES_IN_FLIGHT`] in flight. Returns, per timed
