@@ -175,8 +175,7 @@ impl Bench<'_> {
         // Listing the frame's passes makes the network pipelines that this view needs.
         let bytes_per_pixel = frame.gpu.bytes_per_pixel(ctx, &constants);
         let setup_ms = setup.elapsed().as_secs_f64() * 1e3;
-        let measured =
-            bytes_per_pixel.map_err(Into::into).and_then(|bytes| Ok((bytes, self.measure(&frame, &constants)?)));
+        let measured = (|| -> Result<_> { Ok((bytes_per_pixel?, self.measure(&frame, &constants)?)) })();
         frame.destroy(ctx);
         let (bytes_per_pixel, (stats, objects)) = measured?;
         let [gbuffer, mirrors, network, tonemap, _rest] = &stats.gpu_ms;
