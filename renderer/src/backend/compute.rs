@@ -38,7 +38,7 @@ pub fn tile_block(area: vk::Rect2D, tile: u32) -> ([u32; 2], vk::Extent2D) {
 
 pub struct ComputePass {
     pipelines: Vec<vk::Pipeline>,
-    /// Pipelines made when a frame first needs them ([`ComputePass::deferred`]).
+    /// Pipelines made when a frame first needs them ([`ComputePass::with_deferred`]).
     deferred: Option<Box<Deferred>>,
     pub layout: vk::PipelineLayout,
     set: Option<BoundSet>,
@@ -114,22 +114,15 @@ impl ComputePass {
         Ok(pass.keep())
     }
 
-    /// Like [`ComputePass::specialized`], but no pipeline is made here:
-    /// [`ComputePass::make_deferred`] makes each when a frame first needs it.
-    pub fn deferred(
-        ctx: &Context,
-        name: &str,
-        spirv: &[u32],
-        bindings: &[Bind<'_>],
-        push_bytes: u32,
-        workgroup: (u32, u32),
-        specializations: Vec<Specialization>,
-    ) -> Result<Self> {
-        let mut pass = Self::specialized(ctx, name, spirv, bindings, push_bytes, workgroup, &[])?;
+    /// The pass with pipelines of `spirv` (its layout's shader), one per entry of
+    /// `specializations`, that are not made here: [`ComputePass::make_deferred`] makes each
+    /// when a frame first needs it. They follow the pass's own in
+    /// [`ComputePass::record_pipeline`]'s numbering.
+    pub fn with_deferred(mut self, name: &str, spirv: &[u32], specializations: Vec<Specialization>) -> Self {
         let made = specializations.iter().map(|_| OnceLock::new()).collect();
-        pass.deferred =
+        self.deferred =
             Some(Box::new(Deferred { name: name.to_string(), spirv: spirv.to_vec(), specializations, made }));
-        Ok(pass)
+        self
     }
 
     /// Makes the deferred pipelines of `indices` (in [`ComputePass::record_pipeline`]'s

@@ -356,7 +356,7 @@ impl Destroy for GBufferPass {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::passes::mesh::GBufferVertex;
 
@@ -365,7 +365,7 @@ mod tests {
     }
 
     /// Identity view-projection: the clip volume is x, y in [-1, 1], z in [0, 1].
-    fn identity(light_object: u32, light_offset: [f32; 4]) -> GBufferConstants {
+    pub(crate) fn identity(light_object: u32, light_offset: [f32; 4]) -> GBufferConstants {
         let mut view_projection = [[0.0; 4]; 4];
         for (i, column) in view_projection.iter_mut().enumerate() {
             column[i] = 1.0;

@@ -128,7 +128,6 @@ pub(super) struct Specialized {
     /// Each unit's object and the box outside which its weight is 0 (its two leaves' blend
     /// boxes, bands included, intersected).
     supports: Vec<UnitSupport>,
-    unit_count: u32,
     tiled: bool,
     /// A `VkDispatchIndirectCommand` per unit.
     dispatch: Buffer,
@@ -266,20 +265,15 @@ impl Specialized {
             }
         });
         let bindings = specialized_bindings(gbuffer, shared, &tiles, written, &direct);
-        let networks = ComputePass::deferred(
-            ctx,
-            "network (specialization constants)",
-            specialized_spirv,
-            &bindings,
-            std::mem::size_of::<SpecializedPush>() as u32,
-            (TILE, TILE),
-            one_light.into_iter().chain(several_lights).collect(),
-        )?;
+        let name = "network (specialization constants)";
+        let push_bytes = std::mem::size_of::<SpecializedPush>() as u32;
+        let networks =
+            ComputePass::specialized(ctx, name, specialized_spirv, &bindings, push_bytes, (TILE, TILE), &[])?
+                .with_deferred(name, specialized_spirv, one_light.into_iter().chain(several_lights).collect());
         Ok(Specialized {
             classify: classify.keep(),
             networks,
             supports: units.iter().map(UnitSupport::of).collect(),
-            unit_count: units.len() as u32,
             tiled,
             dispatch: dispatch.keep(),
             dispatch_reset,
@@ -306,8 +300,7 @@ impl Specialized {
         let g = frame.gbuffer_reads();
         let FrameUses { ctx, extent, constants: c, objects, materials, lights, units, writes, .. } = frame;
         let shown = units_in_view(&self.supports, &mesh.object_bounds(), views);
-        let set = if c.light_count > 1 { self.unit_count as usize } else { 0 };
-        self.networks.make_deferred(ctx, shown.iter().map(|&unit| set + unit))?;
+        self.networks.make_deferred(ctx, shown.iter().map(|&unit| self.pipeline(&c, unit)))?;
         let read = |image| Use::image(image, Access::COMPUTE_READ);
         let mut passes = Vec::new();
         if !self.dispatch_reset.is_empty() {
@@ -342,7 +335,7 @@ impl Specialized {
         uses.extend(writes.iter().copied());
         let push = ClassifyPush {
             objects,
-            units: self.unit_count,
+            units: self.supports.len() as u32,
             tile_capacity: self.tile_capacity,
             exposure_scale: c.exposure_scale,
             shown: c.shown,
@@ -376,7 +369,7 @@ impl Specialized {
 
     /// Tile lists for the pass's units at `extent`, and their capacity.
     pub(super) fn tile_buffer(&self, ctx: &Context, extent: vk::Extent2D) -> Result<(Buffer, u32)> {
-        tile_buffer(ctx, self.unit_count as usize, extent)
+        tile_buffer(ctx, self.supports.len(), extent)
     }
 
     /// Records where `new` left the shadow maps or their stand-in.
@@ -442,37 +435,37 @@ impl Specialized {
         push: &SpecializedPush,
         index: usize,
     ) {
-        let pipeline = if c.light_count > 1 { self.unit_count as usize + index } else { index };
         let dispatch = if self.tiled {
             Dispatch::Indirect { buffer: &self.dispatch, offset: 12 * index as u64 }
         } else {
             Dispatch::Covering { width: extent.width, height: extent.height }
         };
-        self.networks.record_pipeline(ctx, cmd, pipeline, bytemuck::bytes_of(push), dispatch);
+        self.networks.record_pipeline(ctx, cmd, self.pipeline(c, index), bytemuck::bytes_of(push), dispatch);
+    }
+
+    /// Unit `unit`'s pipeline in `networks` for a frame of `c`: the one-light set, then the
+    /// several-light set.
+    fn pipeline(&self, c: &NetworkConstants, unit: usize) -> usize {
+        if c.light_count > 1 {
+            self.supports.len() + unit
+        } else {
+            unit
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::passes::gbuffer::tests::identity;
     use crate::passes::network::{LeafBlend, NetworkWeights};
 
-    /// The view of the clip volume itself (x and y from -1 to 1, z from 0 to 1), moved by
-    /// `x` along x, with object id + 1 `light_object` the moving light's.
+    /// The view of the clip volume itself moved by `x` along x, with object id + 1
+    /// `light_object` the moving light's.
     fn view(x: f32, light_object: u32) -> GBufferConstants {
-        let mut view_projection = [[0.0; 4]; 4];
-        for (i, column) in view_projection.iter_mut().enumerate() {
-            column[i] = 1.0;
-        }
-        view_projection[3][0] = -x;
-        GBufferConstants {
-            view_projection,
-            eye: [0.0; 4],
-            light_offset: [0.0; 4],
-            light_scale: [1.0; 4],
-            light_object,
-            pad: [0; 3],
-        }
+        let mut view = identity(light_object, [0.0; 4]);
+        view.view_projection[3][0] = -x;
+        view
     }
 
     fn support(object: usize, from_x: f32, to_x: f32) -> UnitSupport {
