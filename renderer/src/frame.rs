@@ -230,6 +230,12 @@ impl Frame {
         states.set_layout(&self.ldr, vk::ImageLayout::GENERAL);
     }
 
+    /// Tells the barrier tracker that `resource` was just made (see
+    /// [`ResourceStates::forget`]), before a pass of [`Frame::draw`] first uses it.
+    pub fn forget(&self, resource: Resource) {
+        self.states.borrow_mut().forget(resource);
+    }
+
     /// The network pass's variant.
     pub fn variant(&self) -> Variant {
         self.network.variant()
@@ -271,16 +277,19 @@ impl Frame {
 
     /// One frame of the walkthrough, in the command buffer `ring` has begun: drawn to the
     /// display image with `overlay` (a text grid and its scale in screen pixels per font
-    /// pixel), copied to `screenshot` if given, submitted, and with a `presenter` blitted to
-    /// the window's next image and presented. Writes [`TIMESTAMPS`] where the device can.
-    pub fn draw(
-        &self,
-        ctx: &Context,
+    /// pixel) and then the `ui` passes (which draw on [`Frame::ldr`]), copied to `screenshot`
+    /// if given, submitted, and with a `presenter` blitted to the window's next image and
+    /// presented. Writes [`TIMESTAMPS`] where the device can.
+    #[allow(clippy::too_many_arguments)]
+    pub fn draw<'a>(
+        &'a self,
+        ctx: &'a Context,
         ring: &mut FrameLoop,
         presenter: Option<&mut Presenter>,
         constants: &FrameConstants,
         overlay: Option<(&TextGrid, u32)>,
-        screenshot: Option<&Buffer>,
+        ui: Vec<Pass<'a>>,
+        screenshot: Option<&'a Buffer>,
     ) -> Result<Drawn> {
         let handles = ring.handles();
         let target = match presenter {
@@ -291,7 +300,7 @@ impl Frame {
             },
             None => None,
         };
-        let mut extra: Vec<Pass> = Vec::new();
+        let mut extra = ui;
         if let Some(buffer) = screenshot {
             extra.extend(read_back_passes(ctx, &self.ldr, buffer));
         }
@@ -515,7 +524,8 @@ fn create_ldr(ctx: &Context, extent: vk::Extent2D) -> Result<Image> {
         "ldr",
         extent,
         vk::Format::R8G8B8A8_UNORM,
-        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+        // A color attachment too, for the user interface's draws.
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC | vk::ImageUsageFlags::COLOR_ATTACHMENT,
     )?);
     ctx.submit_once(|cmd| ctx.transition(cmd, &ldr, vk::ImageLayout::UNDEFINED, vk::ImageLayout::GENERAL))?;
     Ok(ldr.keep())

@@ -242,7 +242,7 @@ impl Bench<'_> {
                         stats.add_timestamps(&stamps, self.period_ns);
                     }
                 }
-                frame.draw(ctx, &mut ring, None, constants, None, None)?;
+                frame.draw(ctx, &mut ring, None, constants, None, vec![], None)?;
             }
             // Interval k runs from frame k to frame k + 1: keep those of the timed frames.
             stats.frame_ms.truncate(WARM_UP + frames);

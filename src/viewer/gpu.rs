@@ -118,7 +118,7 @@ impl ViewerGpu {
         let ldr = frame.gpu.ldr();
         let buffer = (!screenshots.is_empty()).then(|| ctx.create_readback_buffer(ldr)).transpose()?;
         let overlay = grid.as_ref().map(|g| (g, overlay_scale));
-        let drawn = frame.gpu.draw(ctx, ring, presenter, &constants, overlay, buffer.as_ref());
+        let drawn = frame.gpu.draw(ctx, ring, presenter, &constants, overlay, vec![], buffer.as_ref());
         match (buffer, &drawn) {
             (None, _) => {}
             (Some(buffer), Ok(Drawn::Submitted)) => ring.defer(save_when_done(buffer, screenshots, ldr.extent, saved)),

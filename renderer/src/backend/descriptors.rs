@@ -18,6 +18,8 @@ pub enum Bind<'a> {
     StorageImage(&'a Image),
     StorageBuffer(&'a Buffer),
     UniformBuffer(&'a Buffer),
+    /// An image sampled through a sampler, in `SHADER_READ_ONLY_OPTIMAL` layout.
+    Sampled(&'a Image, vk::Sampler),
 }
 
 impl Bind<'_> {
@@ -26,6 +28,7 @@ impl Bind<'_> {
             Bind::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
             Bind::StorageBuffer(_) => vk::DescriptorType::STORAGE_BUFFER,
             Bind::UniformBuffer(_) => vk::DescriptorType::UNIFORM_BUFFER,
+            Bind::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
         }
     }
 }
@@ -42,17 +45,6 @@ impl BoundSet {
     /// A set of `bindings`, seen by `stages`, pointing at their resources.
     pub fn new(ctx: &Context, name: &str, bindings: &[Bind<'_>], stages: vk::ShaderStageFlags) -> Result<Self> {
         let device = &ctx.device;
-        let layout_bindings: Vec<_> = bindings
-            .iter()
-            .enumerate()
-            .map(|(i, b)| {
-                vk::DescriptorSetLayoutBinding::default()
-                    .binding(i as u32)
-                    .descriptor_type(b.descriptor_type())
-                    .descriptor_count(1)
-                    .stage_flags(stages)
-            })
-            .collect();
         let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
         for b in bindings {
             match sizes.iter_mut().find(|s| s.ty == b.descriptor_type()) {
@@ -68,10 +60,8 @@ impl BoundSet {
         });
         // Each object made below is destroyed by `destroy`, through the guard if a later
         // step fails.
-        let layout_info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings);
-        // SAFETY: a valid create info that outlives the call.
-        bound.layout =
-            unsafe { device.create_descriptor_set_layout(&layout_info, None) }.vk("vkCreateDescriptorSetLayout")?;
+        let types: Vec<vk::DescriptorType> = bindings.iter().map(Bind::descriptor_type).collect();
+        bound.layout = create_set_layout(ctx, &types, stages)?;
         if !sizes.is_empty() {
             let pool_info = vk::DescriptorPoolCreateInfo::default().max_sets(1).pool_sizes(&sizes);
             // SAFETY: a valid create info that outlives the call.
@@ -105,6 +95,29 @@ impl Destroy for BoundSet {
     }
 }
 
+/// A set layout with one descriptor of each of `types`, at bindings 0, 1, …, seen by `stages`.
+/// The caller destroys it.
+pub fn create_set_layout(
+    ctx: &Context,
+    types: &[vk::DescriptorType],
+    stages: vk::ShaderStageFlags,
+) -> Result<vk::DescriptorSetLayout> {
+    let bindings: Vec<_> = types
+        .iter()
+        .enumerate()
+        .map(|(i, ty)| {
+            vk::DescriptorSetLayoutBinding::default()
+                .binding(i as u32)
+                .descriptor_type(*ty)
+                .descriptor_count(1)
+                .stage_flags(stages)
+        })
+        .collect();
+    let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&bindings);
+    // SAFETY: a valid create info that outlives the call.
+    unsafe { ctx.device.create_descriptor_set_layout(&info, None) }.vk("vkCreateDescriptorSetLayout")
+}
+
 /// Points every binding of `set` at its resource.
 unsafe fn write_set(device: &ash::Device, set: vk::DescriptorSet, bindings: &[Bind<'_>]) {
     if set == vk::DescriptorSet::null() {
@@ -116,6 +129,10 @@ unsafe fn write_set(device: &ash::Device, set: vk::DescriptorSet, bindings: &[Bi
             Bind::StorageImage(image) => {
                 [vk::DescriptorImageInfo::default().image_view(image.view).image_layout(vk::ImageLayout::GENERAL)]
             }
+            Bind::Sampled(image, sampler) => [vk::DescriptorImageInfo::default()
+                .image_view(image.view)
+                .sampler(*sampler)
+                .image_layout(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL)],
             _ => [vk::DescriptorImageInfo::default()],
         })
         .collect();
@@ -125,7 +142,7 @@ unsafe fn write_set(device: &ash::Device, set: vk::DescriptorSet, bindings: &[Bi
             Bind::StorageBuffer(buffer) | Bind::UniformBuffer(buffer) => {
                 [vk::DescriptorBufferInfo::default().buffer(buffer.raw).offset(0).range(vk::WHOLE_SIZE)]
             }
-            Bind::StorageImage(_) => [vk::DescriptorBufferInfo::default()],
+            Bind::StorageImage(_) | Bind::Sampled(..) => [vk::DescriptorBufferInfo::default()],
         })
         .collect();
     let writes: Vec<_> = bindings
@@ -137,7 +154,7 @@ unsafe fn write_set(device: &ash::Device, set: vk::DescriptorSet, bindings: &[Bi
                 .dst_binding(i as u32)
                 .descriptor_type(b.descriptor_type());
             match b {
-                Bind::StorageImage(_) => write.image_info(&image_infos[i]),
+                Bind::StorageImage(_) | Bind::Sampled(..) => write.image_info(&image_infos[i]),
                 _ => write.buffer_info(&buffer_infos[i]),
             }
         })

@@ -141,6 +141,12 @@ impl FrameLoop {
         Ok(stamps)
     }
 
+    /// The slot of the frame [`FrameLoop::begin`] began last, from 0 to [`FRAMES_IN_FLIGHT`]:
+    /// what the slot's previous frame used is free again.
+    pub fn slot(&self) -> usize {
+        self.current
+    }
+
     /// The handles of the frame [`FrameLoop::begin`] began last.
     pub fn handles(&self) -> FrameHandles {
         let slot = &self.slots[self.current];

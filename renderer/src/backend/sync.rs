@@ -63,6 +63,20 @@ impl Access {
         vk::AccessFlags2::COLOR_ATTACHMENT_WRITE,
         vk::ImageLayout::GENERAL,
     );
+    /// A color attachment that draws blend onto, in `GENERAL` like the one above.
+    pub const COLOR_ATTACHMENT_BLEND: Access = Access::new(
+        vk::PipelineStageFlags2::COLOR_ATTACHMENT_OUTPUT,
+        vk::AccessFlags2::from_raw(
+            vk::AccessFlags2::COLOR_ATTACHMENT_READ.as_raw() | vk::AccessFlags2::COLOR_ATTACHMENT_WRITE.as_raw(),
+        ),
+        vk::ImageLayout::GENERAL,
+    );
+    /// An image sampled by a fragment shader.
+    pub const FRAGMENT_SAMPLED: Access = Access::new(
+        vk::PipelineStageFlags2::FRAGMENT_SHADER,
+        vk::AccessFlags2::SHADER_SAMPLED_READ,
+        vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+    );
     pub const DEPTH_ATTACHMENT: Access = Access::new(
         vk::PipelineStageFlags2::from_raw(
             vk::PipelineStageFlags2::EARLY_FRAGMENT_TESTS.as_raw()
@@ -203,6 +217,12 @@ impl ResourceStates {
     /// use is ordered after that stage, and its contents are discarded.
     pub fn arrive(&mut self, image: Resource, stage: vk::PipelineStageFlags2) {
         self.states.insert(image, State { write_stage: stage, ..State::default() });
+    }
+
+    /// Forgets what happened to `resource`: a resource just made, whose handle may be that of
+    /// one destroyed before, starts with no access and no layout.
+    pub fn forget(&mut self, resource: Resource) {
+        self.states.remove(&resource);
     }
 
     /// Updates the states for `uses` and returns the barriers they need.

@@ -1,5 +1,5 @@
 //! The passes of a frame, in the order they run: the shadow maps and the G-buffer (both
-//! rasterised), the network pass, the tonemap and the text overlay.
+//! rasterised), the network pass, the tonemap, the text overlay and the user interface.
 
 pub mod gbuffer;
 pub mod mesh;
@@ -9,3 +9,4 @@ pub mod overlay;
 pub mod raster;
 pub mod shadow;
 pub mod tonemap;
+pub mod ui;
