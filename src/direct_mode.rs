@@ -77,6 +77,15 @@ impl DirectMode {
         }
     }
 
+    /// What the mode means, for the viewer's panel.
+    pub fn description(self) -> &'static str {
+        match self {
+            DirectMode::Auto => "chosen per scene",
+            DirectMode::Learned => "learned by the networks",
+            DirectMode::Analytic => "computed: point light and shadow map",
+        }
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             DirectMode::Auto => "auto",

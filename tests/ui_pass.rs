@@ -8,7 +8,7 @@ use common::{finish_clean, gpu};
 use rrf::shaders;
 use rrf_renderer::backend::sync::{run_passes, ResourceStates};
 use rrf_renderer::passes::ui::{UiDraw, UiFrame, UiPass, UiTexels, UiVertex};
-use rrf_renderer::vk;
+use rrf_renderer::{vk, Destroy};
 
 const W: u32 = 40;
 const H: u32 = 30;
@@ -71,13 +71,12 @@ fn ui_draws_blend_over_the_display_as_premultiplied_alpha() {
         freed: vec![],
     };
     for (slot, frame) in [first, second].iter().enumerate() {
-        let uploads = pass.prepare(&ctx, slot, frame, &mut || Ok(())).unwrap();
-        for image in &uploads.new_images {
-            states.forget(*image);
+        for image in pass.prepare(&ctx, slot, frame, &mut || Ok(())).unwrap() {
+            states.forget(image);
         }
-        let passes = pass.passes(&ctx, &display, slot, frame, &uploads).unwrap();
+        let passes = pass.passes(&ctx, &display, slot, frame).unwrap();
         ctx.submit_once(|cmd| run_passes(&ctx, cmd, &mut states, passes)).unwrap();
-        uploads.destroy(&ctx);
+        pass.submitted().destroy(&ctx);
     }
     let out = ctx.read_image(&display, vk::ImageLayout::GENERAL).unwrap();
 

@@ -13,6 +13,7 @@ use super::variant::VariantArg;
 use crate::parse::parse_size;
 use crate::viewer::controls::HELP_TEXT;
 use crate::viewer::gpu::ViewerGpu;
+use crate::viewer::panel::Panel;
 use crate::viewer::script::Script;
 use crate::viewer::startup::StartUp;
 use crate::viewer::state::ViewerState;
@@ -77,6 +78,16 @@ pub struct ViewArgs {
     /// Start with the overlay hidden (O toggles it).
     #[arg(long)]
     pub no_overlay: bool,
+    /// Show the settings panel (lights, exposure, component, trained boxes, GPU time) even in
+    /// a run that ends by itself, where it is hidden by default. U toggles it.
+    #[arg(long, conflicts_with = "no_panel")]
+    pub panel: bool,
+    /// Start with the settings panel hidden in an interactive window.
+    #[arg(long)]
+    pub no_panel: bool,
+    /// Start with automatic exposure: the exposure follows the frame's median brightness.
+    #[arg(long)]
+    pub auto_exposure: bool,
     /// Render without a window even when a display is available.
     #[arg(long)]
     pub headless: bool,
@@ -169,7 +180,12 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     eprintln!("{} on {} ({} network pass)", scene.name, ctx.info.name, args.variant.0.name());
     let mut gpu = ViewerGpu::new(ctx, &scene, &model, (args.variant.0, direct), extent)?;
     startup.phase("frame set-up");
-    let mut session = Session::new(state, plan, startup);
+    let panel_shown = args.panel || (event_loop.is_some() && !plan.scripted() && !args.no_panel);
+    // The panel names the keys; the overlay's list of them starts hidden beside it.
+    state.help = !panel_shown;
+    state.auto_exposure = args.auto_exposure;
+    let panel = Panel::new(panel_shown);
+    let mut session = Session::new(state, panel, plan, startup);
     let ran = match event_loop {
         Some(event_loop) => {
             let title = format!("rrf view: {}", scene.name);

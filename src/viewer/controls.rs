@@ -4,7 +4,7 @@
 use std::sync::LazyLock;
 
 /// Each control: the keys or mouse action, and what it does.
-pub const CONTROLS: [(&str, &str); 18] = [
+pub const CONTROLS: [(&str, &str); 19] = [
     ("W A S D", "move"),
     ("Q E", "down, up"),
     ("Shift", "faster"),
@@ -21,6 +21,7 @@ pub const CONTROLS: [(&str, &str); 18] = [
     ("P", "screenshot (the path is printed)"),
     ("R", "reset view and light"),
     ("O", "overlay"),
+    ("U", "settings panel"),
     ("H", "show or hide this help"),
     ("Esc", "quit"),
 ];

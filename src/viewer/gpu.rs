@@ -1,7 +1,7 @@
-//! The viewer's GPU side: one [`SceneFrame`], frames in flight, and the screenshots they
-//! write once finished.
+//! The viewer's GPU side: one [`SceneFrame`], the settings panel's UI pass, frames in flight,
+//! and what is read back once a frame has finished: screenshots, the exposure meter.
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::path::PathBuf;
 use std::rc::Rc;
 
@@ -13,22 +13,27 @@ use rrf_renderer::backend::frames::{Deferred, FrameLoop};
 use rrf_renderer::backend::present::Presenter;
 use rrf_renderer::frame::{Drawn, FrameOutput, TIMESTAMPS};
 use rrf_renderer::passes::network::Variant;
-use rrf_renderer::{vk, Buffer, Context};
+use rrf_renderer::passes::ui::{UiFrame, UiPass};
+use rrf_renderer::{vk, Buffer, Context, Destroy};
 
 use super::state::ViewerState;
 use crate::direct_mode::DirectMode;
 use crate::frame_stats::Stats;
 use crate::scene_frame::SceneFrame;
+use crate::shaders;
 
 pub struct ViewerGpu {
     pub ctx: Context,
     frame: Option<SceneFrame>,
+    ui: Option<UiPass>,
     ring: Option<FrameLoop>,
     /// Nanoseconds per timestamp tick; `None` when the queue cannot write timestamps.
     period_ns: Option<f64>,
     /// Screenshots are written once their frame has finished, by work the frame loop defers
     /// until then; their outcome lands here.
     saved: Rc<RefCell<Vec<Result<PathBuf>>>>,
+    /// The exposure change the last metered frame asks for ([`super::exposure`]).
+    metered: Rc<Cell<Option<f32>>>,
 }
 
 impl ViewerGpu {
@@ -41,19 +46,50 @@ impl ViewerGpu {
         extent: vk::Extent2D,
     ) -> Result<Self> {
         let frame = SceneFrame::new(&ctx, scene, model, variant, extent, FrameOutput::Display, direct)?;
-        let ring = match FrameLoop::new(&ctx, TIMESTAMPS) {
-            Ok(ring) => ring,
+        let ui = UiPass::new(&ctx, shaders::UI_VERT, shaders::UI_FRAG);
+        let ring = ui.and_then(|ui| match FrameLoop::new(&ctx, TIMESTAMPS) {
+            Ok(ring) => Ok((ui, ring)),
+            Err(e) => {
+                ui.destroy(&ctx);
+                Err(e)
+            }
+        });
+        let (ui, ring) = match ring {
+            Ok(made) => made,
             Err(e) => {
                 frame.destroy(&ctx);
                 return Err(e.into());
             }
         };
         let period_ns = ctx.info.limits.timestamp_period_ns.map(f64::from);
-        Ok(ViewerGpu { ctx, frame: Some(frame), ring: Some(ring), period_ns, saved: Rc::default() })
+        Ok(ViewerGpu {
+            ctx,
+            frame: Some(frame),
+            ui: Some(ui),
+            ring: Some(ring),
+            period_ns,
+            saved: Rc::default(),
+            metered: Rc::default(),
+        })
     }
 
     fn parts(&mut self) -> (&Context, &mut SceneFrame, &mut FrameLoop) {
         (&self.ctx, self.frame.as_mut().expect("live until finish"), self.ring.as_mut().expect("live until finish"))
+    }
+
+    /// The exposure change in stops that the last metered frame asks for, once.
+    pub fn take_metered(&self) -> Option<f32> {
+        self.metered.take()
+    }
+
+    /// Whether frames write timestamps, for GPU time per pass.
+    pub fn timed(&self) -> bool {
+        self.period_ns.is_some()
+    }
+
+    /// The largest texture side the device takes, for the panel's font atlas.
+    pub fn max_texture_side(&self) -> usize {
+        self.ctx.info.limits.max_image_dimension_2d as usize
     }
 
     pub fn variant(&self) -> Variant {
@@ -95,18 +131,26 @@ impl ViewerGpu {
         }
     }
 
-    /// Draws one frame of `state` (presented in a window, with a `presenter`), and saves it
-    /// as shown to each PNG of `screenshots` once the GPU has finished it.
+    /// Draws one frame of `state` with the panel's `ui` over it (presented in a window, with
+    /// a `presenter`), and saves it as shown to each PNG of `screenshots` once the GPU has
+    /// finished it. With `meter`, measures the brightness of the frame's first `meter`
+    /// columns for automatic exposure ([`ViewerGpu::take_metered`]).
+    #[allow(clippy::too_many_arguments)]
     pub fn draw(
         &mut self,
         state: &ViewerState,
         stats: &mut Stats,
         presenter: Option<&mut Presenter>,
         overlay_scale: u32,
+        ui: &UiFrame,
         screenshots: Vec<PathBuf>,
+        meter: Option<u32>,
     ) -> Result<()> {
-        let (period_ns, saved) = (self.period_ns, self.saved.clone());
-        let (ctx, frame, ring) = self.parts();
+        let (period_ns, saved, metered) = (self.period_ns, self.saved.clone(), self.metered.clone());
+        let ctx = &self.ctx;
+        let frame = self.frame.as_mut().expect("live until finish");
+        let ring = self.ring.as_mut().expect("live until finish");
+        let ui_pass = self.ui.as_mut().expect("live until finish");
         let stamps = ring.begin(ctx)?;
         stats.frame_started();
         if let (Some(stamps), Some(period)) = (stamps, period_ns) {
@@ -115,13 +159,26 @@ impl ViewerGpu {
         let constants = frame.constants(&state.settings());
         let reflected = frame.has_mirrors().then_some(constants.mirrors.len());
         let grid = state.overlay.then(|| state.overlay_text(stats, &ctx.info.name, reflected));
+        let slot = ring.slot();
+        for image in ui_pass.prepare(ctx, slot, ui, &mut || ring.wait_all(ctx))? {
+            frame.gpu.forget(image);
+        }
         let ldr = frame.gpu.ldr();
-        let buffer = (!screenshots.is_empty()).then(|| ctx.create_readback_buffer(ldr)).transpose()?;
+        let read_back = !screenshots.is_empty() || meter.is_some();
+        let buffer = read_back.then(|| ctx.create_readback_buffer(ldr)).transpose()?;
         let overlay = grid.as_ref().map(|g| (g, overlay_scale));
-        let drawn = frame.gpu.draw(ctx, ring, presenter, &constants, overlay, vec![], buffer.as_ref());
+        let ui_passes = ui_pass.passes(ctx, ldr, slot, ui)?;
+        let drawn = frame.gpu.draw(ctx, ring, presenter, &constants, overlay, ui_passes, buffer.as_ref());
+        if !matches!(drawn, Ok(Drawn::Skipped)) {
+            let staging = ui_pass.submitted();
+            ring.defer(Box::new(move |ctx: &Context| staging.destroy(ctx)));
+        }
         match (buffer, &drawn) {
             (None, _) => {}
-            (Some(buffer), Ok(Drawn::Submitted)) => ring.defer(save_when_done(buffer, screenshots, ldr.extent, saved)),
+            (Some(buffer), Ok(Drawn::Submitted)) => {
+                let meter = meter.map(|columns| (columns, metered));
+                ring.defer(read_when_done(buffer, screenshots, meter, ldr.extent, saved))
+            }
             // Never submitted: nothing uses it.
             (Some(buffer), Ok(Drawn::Skipped)) => ctx.destroy_buffer(buffer),
             // Maybe submitted: destroyed once the frame is done.
@@ -144,6 +201,7 @@ impl ViewerGpu {
         let ring = self.ring.take().expect("live until finish");
         // Runs the work deferred to the end of each frame: screenshots of the last frames.
         ring.destroy(&self.ctx);
+        self.ui.take().destroy(&self.ctx);
         let saved = super::report_saved(&self);
         if let Some(frame) = self.frame.take() {
             frame.destroy(&self.ctx);
@@ -162,11 +220,12 @@ impl ViewerGpu {
 }
 
 /// Work for the frame loop to do once the frame that copied its display image (`extent`) to
-/// `buffer` has finished: write it to each of `paths`, report each outcome in `saved`, and
-/// destroy the buffer.
-fn save_when_done(
+/// `buffer` has finished: write it to each of `paths` and report each outcome in `saved`;
+/// with `meter`, put the exposure change it asks for there; and destroy the buffer.
+fn read_when_done(
     buffer: Buffer,
     paths: Vec<PathBuf>,
+    meter: Option<(u32, Rc<Cell<Option<f32>>>)>,
     extent: vk::Extent2D,
     saved: Rc<RefCell<Vec<Result<PathBuf>>>>,
 ) -> Deferred {
@@ -174,6 +233,10 @@ fn save_when_done(
         for path in paths {
             let rgba = buffer.mapped().context("the screenshot buffer is not host-visible");
             saved.borrow_mut().push(rgba.and_then(|rgba| save_png(&path, extent, rgba)).map(|()| path));
+        }
+        if let (Some((columns, meter)), Some(rgba)) = (meter, buffer.mapped()) {
+            let width = extent.width as usize;
+            meter.set(Some(super::exposure::correction(rgba, width, columns as usize)));
         }
         ctx.destroy_buffer(buffer);
     })

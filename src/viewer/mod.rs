@@ -2,7 +2,9 @@
 //! keyboard and mouse or by a script.
 
 pub mod controls;
+pub mod exposure;
 pub mod gpu;
+pub mod panel;
 pub mod script;
 pub mod startup;
 pub mod state;
@@ -15,7 +17,9 @@ use std::time::Instant;
 use anyhow::{Context as _, Result};
 
 use crate::frame_stats::Stats;
+use crate::gpu_scene::gbuffer_constants;
 use gpu::ViewerGpu;
+use panel::Panel;
 use rrf_renderer::backend::present::Presenter;
 use rrf_renderer::passes::network::Variant;
 use script::{Action, Script, FRAME_SECONDS};
@@ -53,16 +57,22 @@ impl RunPlan {
 }
 
 /// What the session wants the window to do after a frame.
-#[derive(Debug, Default)]
+#[derive(Default)]
 pub struct Requests {
     pub resize: Option<(u32, u32)>,
     pub quit: bool,
+    /// What the panel asks of the window (the cursor's shape).
+    pub platform: Option<egui::PlatformOutput>,
 }
+
+/// Frames between two readings of the automatic exposure's meter.
+const METER_FRAMES: u64 = 4;
 
 /// A viewer run, apart from the window: the state, input, script and statistics, and the
 /// frame counter.
 pub struct Session {
     pub state: ViewerState,
+    pub panel: Panel,
     pub stats: Stats,
     pub held: HashSet<Held>,
     plan: RunPlan,
@@ -79,9 +89,10 @@ pub struct Session {
 }
 
 impl Session {
-    pub fn new(state: ViewerState, plan: RunPlan, startup: StartUp) -> Self {
+    pub fn new(state: ViewerState, panel: Panel, plan: RunPlan, startup: StartUp) -> Self {
         Session {
             state,
+            panel,
             stats: Stats::default(),
             held: HashSet::new(),
             plan,
@@ -101,13 +112,14 @@ impl Session {
         self.pending_screenshot = Some(PathBuf::from(format!("rrf-screenshot-{:03}.png", self.screenshots_taken)));
     }
 
-    /// Advances time, plays the frame's script events, and draws it. Returns what the window
-    /// should do next.
+    /// Advances time, plays the frame's script events, runs the panel on the window's `input`
+    /// (none headless), and draws the frame. Returns what the window should do next.
     pub fn step(
         &mut self,
         gpu: &mut ViewerGpu,
         presenter: Option<&mut Presenter>,
         overlay_scale: u32,
+        input: Option<egui::RawInput>,
     ) -> Result<Requests> {
         let mut requests = Requests::default();
         let (dt, t) = if self.plan.scripted() {
@@ -133,6 +145,18 @@ impl Session {
                 }
             }
         }
+        let extent = gpu.extent();
+        let input = input.unwrap_or_else(|| headless_input(extent, t, gpu.max_texture_side()));
+        let ppp = extent.width as f32 / input.screen_rect.map_or(extent.width as f32, |r| r.width()).max(1.0);
+        let aspect = extent.width as f32 / extent.height as f32;
+        let view_projection = gbuffer_constants(&self.state.view(), aspect, None).view_projection;
+        let (ui, platform) = self.panel.run(input, &mut self.state, &self.stats, &view_projection, gpu.timed());
+        requests.platform = Some(platform);
+        if let (true, Some(stops)) = (self.state.auto_exposure, gpu.take_metered()) {
+            self.state.exposure_step(stops);
+        }
+        let columns = (self.panel.left_edge() * ppp).round().clamp(1.0, extent.width as f32) as u32;
+        let meter = (self.state.auto_exposure && self.frame % METER_FRAMES == 0).then_some(columns);
         self.state.update(&self.held, dt as f32, t);
         let last = self.plan.last_frame().is_some_and(|n| self.frame + 1 >= n);
         if let (true, Some(path)) = (last, &self.plan.screenshot) {
@@ -145,7 +169,7 @@ impl Session {
                 eprintln!("first frame with several lights: making their network pipelines (once)");
             }
         }
-        gpu.draw(&self.state, &mut self.stats, presenter, overlay_scale, screenshots)?;
+        gpu.draw(&self.state, &mut self.stats, presenter, overlay_scale, &ui, screenshots, meter)?;
         if self.frame == 0 {
             // Once: start-up ends when the first frame is finished, not when it is submitted.
             gpu.wait_idle()?;
@@ -179,10 +203,22 @@ pub fn report_saved(gpu: &ViewerGpu) -> Result<()> {
     Ok(())
 }
 
+/// The panel's input without a window: no events, a screen of the frame's size (one point a
+/// pixel), and script time.
+fn headless_input(extent: rrf_renderer::vk::Extent2D, t: f64, max_texture_side: usize) -> egui::RawInput {
+    let size = egui::vec2(extent.width as f32, extent.height as f32);
+    egui::RawInput {
+        screen_rect: Some(egui::Rect::from_min_size(egui::Pos2::ZERO, size)),
+        time: Some(t),
+        max_texture_side: Some(max_texture_side),
+        ..Default::default()
+    }
+}
+
 /// Runs a session without a window: frames go to the display image only (screenshots read it).
 pub fn run_headless(gpu: &mut ViewerGpu, session: &mut Session) -> Result<()> {
     loop {
-        let requests = session.step(gpu, None, 1)?;
+        let requests = session.step(gpu, None, 1, None)?;
         if let Some((w, h)) = requests.resize {
             gpu.resize(rrf_renderer::vk::Extent2D { width: w, height: h })?;
         }

@@ -74,6 +74,8 @@ pub struct ViewerState {
     pub light_at_edge: bool,
     pub shown: Shown,
     pub exposure: f32,
+    /// Whether the exposure follows the frame's brightness ([`ViewerState::meter`]).
+    pub auto_exposure: bool,
     pub overlay: bool,
     pub help: bool,
     /// Where direct light comes from, for the overlay.
@@ -110,6 +112,7 @@ impl ViewerState {
             light_at_edge: false,
             shown: Shown::Gi,
             exposure: 0.0,
+            auto_exposure: false,
             overlay: true,
             help: true,
             direct: DirectMode::Learned,
@@ -152,6 +155,28 @@ impl ViewerState {
     /// Moves the selected light to `p`, or as near as its trained box allows.
     fn set_light(&mut self, p: Vec3) {
         self.place_light(self.selected, p);
+    }
+
+    /// Moves the selected light to `p`, or as near as its trained box allows, ending any
+    /// scripted move of it (the panel's sliders).
+    pub fn move_light(&mut self, p: Vec3) {
+        self.light_tween = None;
+        self.set_light(p);
+    }
+
+    /// The box the light was trained in, where the scene has a moving light.
+    pub fn light_box(&self) -> Option<Aabb> {
+        self.light_box
+    }
+
+    /// The box the camera was trained in, where the scene gives one.
+    pub fn camera_box(&self) -> Option<Aabb> {
+        self.camera_box
+    }
+
+    /// Why lights cannot be added, recoloured or dimmed in this scene, if they cannot.
+    pub fn fixed_lights(&self) -> Option<&str> {
+        self.fixed_lights.as_deref()
     }
 
     /// Moves light `index` to `p`, or as near as its trained box allows.

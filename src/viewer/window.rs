@@ -56,6 +56,8 @@ struct App<'a> {
     present_mode: vk::PresentModeKHR,
     window: Option<Window>,
     presenter: Option<Presenter>,
+    /// The panel's input from the window's events.
+    egui: Option<egui_winit::State>,
     looking: bool,
     /// Whether the window is hidden (minimised or covered, where the platform says so).
     occluded: bool,
@@ -78,6 +80,14 @@ impl App<'_> {
         let handle = window.window_handle().context("no window handle")?.as_raw();
         let surface = Surface::new(&self.gpu.ctx, display, handle)?;
         self.presenter = Some(Presenter::new(surface, self.present_mode));
+        self.egui = Some(egui_winit::State::new(
+            self.session.panel.context().clone(),
+            egui::ViewportId::ROOT,
+            &window,
+            Some(window.scale_factor() as f32),
+            None,
+            Some(self.gpu.max_texture_side()),
+        ));
         self.window = Some(window);
         Ok(())
     }
@@ -90,7 +100,11 @@ impl App<'_> {
             return Ok(());
         }
         let scale = window.scale_factor().round().max(1.0) as u32;
-        let requests = self.session.step(self.gpu, Some(presenter), scale)?;
+        let input = self.egui.as_mut().map(|e| e.take_egui_input(window));
+        let requests = self.session.step(self.gpu, Some(presenter), scale, input)?;
+        if let (Some(egui), Some(platform)) = (&mut self.egui, requests.platform) {
+            egui.handle_platform_output(window, platform);
+        }
         if let Some((w, h)) = requests.resize {
             // The swapchain follows when the window has its new size.
             let _ = window.request_inner_size(PhysicalSize::new(w, h));
@@ -103,16 +117,19 @@ impl App<'_> {
         Ok(())
     }
 
-    fn key(&mut self, event_loop: &ActiveEventLoop, event: &KeyEvent) {
+    /// A key, unless the panel took it (`to_panel`: a text field has the focus); a key let go
+    /// always counts, so that none stays held.
+    fn key(&mut self, event_loop: &ActiveEventLoop, event: &KeyEvent, to_panel: bool) {
         let PhysicalKey::Code(code) = event.physical_key else { return };
         if let Some(held) = held_key(code) {
             match event.state {
-                ElementState::Pressed => self.session.held.insert(held),
+                ElementState::Pressed if !to_panel => self.session.held.insert(held),
+                ElementState::Pressed => false,
                 ElementState::Released => self.session.held.remove(&held),
             };
             return;
         }
-        if event.state != ElementState::Pressed || event.repeat {
+        if event.state != ElementState::Pressed || event.repeat || to_panel {
             return;
         }
         let state = &mut self.session.state;
@@ -125,6 +142,7 @@ impl App<'_> {
             KeyCode::BracketRight => state.exposure_step(0.5),
             KeyCode::KeyH => state.help = !state.help,
             KeyCode::KeyO => state.overlay = !state.overlay,
+            KeyCode::KeyU => self.session.panel.shown = !self.session.panel.shown,
             KeyCode::KeyR => state.reset(),
             KeyCode::KeyL => state.key_edit(ViewerState::duplicate_light),
             KeyCode::Tab => state.key_edit(|s| s.select_light((s.selected + 1) % s.lights.len())),
@@ -152,6 +170,12 @@ impl ApplicationHandler for App<'_> {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
+        // What the panel takes (a click on it, a key while a field has the focus) goes no
+        // further.
+        let to_panel = match (&mut self.egui, &self.window) {
+            (Some(egui), Some(window)) => egui.on_window_event(window, &event).consumed,
+            _ => false,
+        };
         match event {
             WindowEvent::CloseRequested => event_loop.exit(),
             WindowEvent::Resized(_) | WindowEvent::ScaleFactorChanged { .. } => {
@@ -164,7 +188,7 @@ impl ApplicationHandler for App<'_> {
                     self.fail(event_loop, e);
                 }
             }
-            WindowEvent::KeyboardInput { event, .. } => self.key(event_loop, &event),
+            WindowEvent::KeyboardInput { event, .. } => self.key(event_loop, &event, to_panel),
             WindowEvent::Focused(false) => self.session.held.clear(),
             // No frames while hidden; the loop sleeps until the window shows again.
             WindowEvent::Occluded(hidden) => {
@@ -174,7 +198,7 @@ impl ApplicationHandler for App<'_> {
                 }
             }
             WindowEvent::MouseInput { button: MouseButton::Right, state, .. } => {
-                self.looking = state == ElementState::Pressed;
+                self.looking = state == ElementState::Pressed && !to_panel;
             }
             WindowEvent::CursorMoved { position, .. } => {
                 let p = (position.x, position.y);
@@ -183,7 +207,7 @@ impl ApplicationHandler for App<'_> {
                 }
                 self.cursor = Some(p);
             }
-            WindowEvent::MouseWheel { delta, .. } => {
+            WindowEvent::MouseWheel { delta, .. } if !to_panel => {
                 let notches = match delta {
                     MouseScrollDelta::LineDelta(_, y) => y,
                     MouseScrollDelta::PixelDelta(p) => (p.y / 40.0) as f32,
@@ -214,6 +238,7 @@ pub fn run(
         present_mode,
         window: None,
         presenter: None,
+        egui: None,
         looking: false,
         occluded: false,
         cursor: None,

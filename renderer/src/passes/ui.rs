@@ -84,21 +84,19 @@ struct SlotBuffers {
     indices: Option<Buffer>,
 }
 
-/// What [`UiPass::prepare`] leaves for the frame: staging buffers to copy from, and what to
-/// destroy once the frame has finished.
-pub struct UiUploads {
-    copies: Vec<(u64, Buffer, vk::Rect2D)>,
-    /// Images the frame's barrier tracker has not seen (their handles may repeat a destroyed
-    /// image's, whose state it must forget).
-    pub new_images: Vec<Resource>,
+/// Texels on their way to a texture: a staging buffer, and where in the texture they go.
+struct Upload {
+    texture: u64,
+    staging: Buffer,
+    rect: vk::Rect2D,
 }
 
-impl UiUploads {
-    /// Destroys the staging buffers, once the frame that copied from them has finished.
-    pub fn destroy(self, ctx: &Context) {
-        for (_, buffer, _) in self.copies {
-            ctx.destroy_buffer(buffer);
-        }
+/// Staging buffers that a submitted frame copies from, to destroy once it has finished.
+pub struct UiStaging(Vec<Buffer>);
+
+impl Destroy for UiStaging {
+    fn destroy(self, ctx: &Context) {
+        self.0.destroy(ctx);
     }
 }
 
@@ -116,6 +114,8 @@ pub struct UiPass {
     textures: HashMap<u64, UiTexture>,
     /// Textures a frame freed, destroyed when the next frame is prepared.
     freed: Vec<u64>,
+    /// Texels given to [`UiPass::prepare`] that no submitted frame has copied yet.
+    pending: Vec<Upload>,
     slots: [SlotBuffers; FRAMES_IN_FLIGHT],
 }
 
@@ -132,6 +132,7 @@ impl UiPass {
             sampler: vk::Sampler::null(),
             textures: HashMap::new(),
             freed: Vec::new(),
+            pending: Vec::new(),
             slots: Default::default(),
         });
         pass.set_layout =
@@ -160,14 +161,16 @@ impl UiPass {
     /// frame slot `slot`, whose previous frame must have finished. Destroying a texture (one
     /// the previous frame freed, or one made anew) waits for every frame in flight
     /// (`wait_all`) first: that is rare (a new font size), and the texels of a rectangle go
-    /// through the frame itself.
+    /// through the frame itself, in [`UiPass::passes`]. Returns the images it made, which the
+    /// frame's barrier tracker has not seen (their handles may repeat a destroyed image's,
+    /// whose state it must forget).
     pub fn prepare(
         &mut self,
         ctx: &Context,
         slot: usize,
         frame: &UiFrame,
         wait_all: &mut dyn FnMut() -> Result<()>,
-    ) -> Result<UiUploads> {
+    ) -> Result<Vec<Resource>> {
         if !self.freed.is_empty() {
             wait_all()?;
             for id in std::mem::take(&mut self.freed) {
@@ -175,25 +178,17 @@ impl UiPass {
             }
         }
         self.freed.extend(&frame.freed);
-        let mut uploads = UiUploads { copies: Vec::new(), new_images: Vec::new() };
-        let mut prepared = self.upload_texels(ctx, frame, &mut uploads, wait_all);
-        if prepared.is_ok() {
-            prepared = self.write_geometry(ctx, slot, frame);
-        }
-        match prepared {
-            Ok(()) => Ok(uploads),
-            Err(e) => {
-                uploads.destroy(ctx);
-                Err(e)
-            }
-        }
+        let mut made = Vec::new();
+        self.upload_texels(ctx, frame, &mut made, wait_all)?;
+        self.write_geometry(ctx, slot, frame)?;
+        Ok(made)
     }
 
     fn upload_texels(
         &mut self,
         ctx: &Context,
         frame: &UiFrame,
-        uploads: &mut UiUploads,
+        made: &mut Vec<Resource>,
         wait_all: &mut dyn FnMut() -> Result<()>,
     ) -> Result<()> {
         for texels in &frame.texels {
@@ -221,28 +216,35 @@ impl UiPass {
                 None => {
                     let extent = vk::Extent2D { width, height };
                     let texture = self.create_texture(ctx, extent)?;
-                    uploads.new_images.push(Resource::image(&texture.image));
+                    made.push(Resource::image(&texture.image));
                     if let Some(old) = self.textures.insert(texels.texture, texture) {
+                        // Texels still pending for the old texture go nowhere now.
+                        let (stale, pending) = std::mem::take(&mut self.pending)
+                            .into_iter()
+                            .partition(|u: &Upload| u.texture == texels.texture);
+                        self.pending = pending;
                         wait_all()?;
                         old.destroy(ctx);
+                        for upload in stale {
+                            ctx.destroy_buffer(upload.staging);
+                        }
                     }
                     [0, 0]
                 }
             };
-            let staging = ctx.create_buffer(
+            let mut staging = ctx.create_buffer(
                 "ui texels",
                 texels.rgba.len() as u64,
                 vk::BufferUsageFlags::TRANSFER_SRC,
                 MemoryLocation::CpuToGpu,
             )?;
+            staging.mapped_mut().expect("CpuToGpu buffers are mapped")[..texels.rgba.len()]
+                .copy_from_slice(&texels.rgba);
             let rect = vk::Rect2D {
                 offset: vk::Offset2D { x: offset[0] as i32, y: offset[1] as i32 },
                 extent: vk::Extent2D { width, height },
             };
-            uploads.copies.push((texels.texture, staging, rect));
-            let staging = &mut uploads.copies.last_mut().expect("just pushed").1;
-            staging.mapped_mut().expect("CpuToGpu buffers are mapped")[..texels.rgba.len()]
-                .copy_from_slice(&texels.rgba);
+            self.pending.push(Upload { texture: texels.texture, staging, rect });
         }
         Ok(())
     }
@@ -277,20 +279,20 @@ impl UiPass {
         Ok(())
     }
 
-    /// The passes that copy `uploads` into their textures and draw `frame` over `display`
-    /// (RGBA8, in `GENERAL` layout) from slot `slot`'s buffers, as [`UiPass::prepare`] left
-    /// them.
+    /// The passes that copy the pending texels into their textures and draw `frame` over
+    /// `display` (RGBA8, in `GENERAL` layout) from slot `slot`'s buffers, as
+    /// [`UiPass::prepare`] left them. Once the frame is submitted, [`UiPass::submitted`] hands
+    /// over the staging buffers; until then the texels stay pending.
     pub fn passes<'a>(
         &'a self,
         ctx: &'a Context,
         display: &'a Image,
         slot: usize,
         frame: &UiFrame,
-        uploads: &'a UiUploads,
     ) -> Result<Vec<Pass<'a>>> {
         let mut passes = Vec::new();
-        for (id, staging, rect) in &uploads.copies {
-            let image = &self.texture(*id)?.image;
+        for Upload { texture, staging, rect } in &self.pending {
+            let image = &self.texture(*texture)?.image;
             let uses = vec![Use::buffer(staging, Access::TRANSFER_READ), Use::image(image, Access::TRANSFER_WRITE)];
             passes.push(Pass::new("ui texels", uses, move |cmd| copy_texels(ctx, cmd, staging, image, *rect)));
         }
@@ -318,6 +320,12 @@ impl UiPass {
             self.record(ctx, cmd, display, (vertices, indices), &draws, push);
         }));
         Ok(passes)
+    }
+
+    /// The staging buffers of the frame just submitted (or that may have been), to destroy
+    /// once it has finished.
+    pub fn submitted(&mut self) -> UiStaging {
+        UiStaging(self.pending.drain(..).map(|u| u.staging).collect())
     }
 
     fn texture(&self, id: u64) -> Result<&UiTexture> {
@@ -376,6 +384,9 @@ impl UiPass {
     }
 
     pub fn destroy(self, ctx: &Context) {
+        for upload in self.pending {
+            ctx.destroy_buffer(upload.staging);
+        }
         for (_, texture) in self.textures {
             texture.destroy(ctx);
         }
