@@ -202,3 +202,123 @@ fn shipped_demo_scripts_parse() {
         assert!(script.frames() > 60, "{scene}'s demo is too short");
     }
 }
+
+/// The median display-linear luminance of the pixels of `image` in columns `columns` that are
+/// not pure black (as the automatic exposure's meter reads them).
+fn median_luminance(image: &image::RgbImage, columns: std::ops::Range<u32>) -> f32 {
+    let linear = |c: u8| {
+        let c = f32::from(c) / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let mut values: Vec<f32> = image
+        .enumerate_pixels()
+        .filter(|(x, _, p)| columns.contains(x) && p.0 != [0, 0, 0])
+        .map(|(_, _, p)| 0.2126 * linear(p.0[0]) + 0.7152 * linear(p.0[1]) + 0.0722 * linear(p.0[2]))
+        .collect();
+    values.sort_by(f32::total_cmp);
+    values[values.len() / 2]
+}
+
+#[test]
+fn the_settings_panel_draws_in_a_window_and_hides_again() {
+    let (with, without) = (temp("panel-on.png"), temp("panel-off.png"));
+    let script = temp("panel.txt");
+    std::fs::write(
+        &script,
+        format!(
+            "0    panel on\n\
+             0    boxes on\n\
+             0.1  resize 480x270\n\
+             0.3  screenshot {}\n\
+             0.35 panel off\n\
+             0.35 boxes off\n\
+             0.45 screenshot {}\n",
+            with.display(),
+            without.display()
+        ),
+    )
+    .unwrap();
+    let run = rrf_in_xvfb(&[
+        "view",
+        "scenes/cornell-box",
+        "--size",
+        "400x240",
+        "--no-overlay",
+        "--script",
+        script.to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "rrf view failed:\n{stderr}");
+    assert!(!stderr.contains("headless"), "the run did not open a window:\n{stderr}");
+    let (with, without) = (load(&with), load(&without));
+    assert_eq!(with.dimensions(), (480, 270));
+    // The panel is 270 points wide, on the right: there the two frames differ; to its left
+    // only the boxes' outlines do.
+    let differs = |x0: u32, x1: u32| {
+        let mut n = 0;
+        for y in 0..270 {
+            for x in x0..x1 {
+                let (a, b) = (with.get_pixel(x, y).0, without.get_pixel(x, y).0);
+                n += usize::from(a.iter().zip(b).any(|(a, b)| a.abs_diff(b) > 2));
+            }
+        }
+        n as f64 / f64::from((x1 - x0) * 270)
+    };
+    let (panel, scene) = (differs(215, 480), differs(0, 205));
+    assert!(panel > 0.5, "only {:.0}% of the panel's pixels differ", panel * 100.0);
+    assert!(
+        scene > 0.002 && scene < 0.1,
+        "{:.1}% of the pixels left of the panel differ (outlines only)",
+        scene * 100.0
+    );
+    // egui's dark panel: mostly dark grey, with lighter text.
+    let panel_pixels: Vec<u8> =
+        (0..270).flat_map(|y| (215..480).map(move |x| (x, y))).map(|(x, y)| with.get_pixel(x, y).0[1]).collect();
+    let dark = panel_pixels.iter().filter(|v| (10..60).contains(*v)).count() as f64 / panel_pixels.len() as f64;
+    let light = panel_pixels.iter().filter(|v| **v > 150).count();
+    assert!(
+        dark > 0.6 && light > 200,
+        "the panel is not dark with light text ({:.0}% dark, {light} light)",
+        dark * 100.0
+    );
+    let _ = std::fs::remove_file(script);
+}
+
+#[test]
+fn automatic_exposure_brings_a_dark_frame_to_mid_grey() {
+    let (auto, fixed) = (temp("auto.png"), temp("fixed.png"));
+    let shoot = |script: &str, shot: &Path| {
+        let path = temp(&format!("{}.txt", shot.file_stem().unwrap().to_string_lossy()));
+        std::fs::write(&path, format!("{script}2 screenshot {}\n", shot.display())).unwrap();
+        let run = rrf(
+            &[
+                "view",
+                "scenes/cornell-box",
+                "--headless",
+                "--size",
+                "160x90",
+                "--no-overlay",
+                "--script",
+                path.to_str().unwrap(),
+            ],
+            &[("RRF_VALIDATION", "required")],
+        );
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        let _ = std::fs::remove_file(path);
+        load(shot)
+    };
+    let dark = median_luminance(&shoot("0 exposure -6\n", &fixed), 0..160);
+    let metered = median_luminance(&shoot("0 exposure -6\n0 exposure auto\n", &auto), 0..160);
+    assert!(dark < 0.01, "at -6 EV the median pixel is {dark}");
+    assert!(
+        (0.09..0.36).contains(&metered),
+        "after 2 s of automatic exposure the median pixel is {metered}, not about 0.18"
+    );
+    for f in [auto, fixed] {
+        let _ = std::fs::remove_file(f);
+    }
+}

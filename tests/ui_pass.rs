@@ -47,7 +47,13 @@ fn ui_draws_blend_over_the_display_as_premultiplied_alpha() {
     let first = UiFrame {
         screen_points,
         texels: vec![UiTexels { texture: TEXTURE, offset: None, size: [2, 2], rgba: vec![255; 16] }],
-        draws: vec![UiDraw { texture: TEXTURE, clip: rect(0, 0, W, H), first_index: 0, index_count: 6, vertex_offset: 0 }],
+        draws: vec![UiDraw {
+            texture: TEXTURE,
+            clip: rect(0, 0, W, H),
+            first_index: 0,
+            index_count: 6,
+            vertex_offset: 0,
+        }],
         vertices,
         indices,
         freed: vec![],
@@ -96,7 +102,11 @@ fn ui_draws_blend_over_the_display_as_premultiplied_alpha() {
             for c in 0..3 {
                 let got = out[i + c];
                 // 8-bit storage of the blend, plus float slack.
-                assert!((got - want[c]).abs() <= 1.0 / 255.0 + 1e-4, "pixel ({x}, {y}) channel {c}: {got}, want {}", want[c]);
+                assert!(
+                    (got - want[c]).abs() <= 1.0 / 255.0 + 1e-4,
+                    "pixel ({x}, {y}) channel {c}: {got}, want {}",
+                    want[c]
+                );
             }
         }
     }

@@ -107,10 +107,12 @@ time, which advances by 1/60 s per frame whatever the frame rate; # starts a com
   remove-light                   remove the selected light (not the last)
   light-color R,G,B [intensity K]   the selected light's colour (each 0 to 1) and intensity
   component gi|direct|indirect   which light is shown
-  exposure EV                    exposure in stops
+  exposure EV|auto               exposure in stops, or automatic
   resize WxH                     window (or headless frame) size in pixels
   screenshot FILE.png            save the frame as shown
   overlay on|off                 show or hide the overlay
+  panel on|off                   show or hide the settings panel
+  boxes on|off                   outline the light's and the camera's trained boxes
   quit                           end here (otherwise one frame after the last event)
 scenes/NAME/demo.txt is a demo script for each shipped scene.
 

@@ -1,7 +1,7 @@
 //! Automatic exposure: the walkthrough reads a frame back now and then and moves the exposure
 //! so that the frame's median brightness sits at mid-grey, as a camera's meter does. The
-//! median, unlike the mean, is not pulled up by a light source in view or down by a black
-//! background.
+//! median, unlike the mean, is not pulled up by a light source in view; pixels of pure black,
+//! where no surface is (the background), are left out.
 
 /// Display-referred luminance the median pixel is brought to: mid-grey (18%).
 const TARGET: f32 = 0.18;
@@ -10,8 +10,9 @@ const TARGET: f32 = 0.18;
 const GAIN: f32 = 0.5;
 /// The largest correction in stops, so that a black frame does not throw the exposure far.
 const MAX_STEP: f32 = 1.0;
-/// The meter reads every `STRIDE`-th pixel.
-const STRIDE: usize = 4;
+/// The meter reads every `STRIDE`-th pixel; a prime, so that the pixels read do not line up
+/// in columns.
+const STRIDE: usize = 7;
 /// The darkest luminance the meter counts with; a frame darker than that is as dark as it.
 const FLOOR: f32 = 1e-4;
 
@@ -22,7 +23,7 @@ pub fn correction(rgba: &[u8], width: usize, columns: usize) -> f32 {
     let mut luminance: Vec<f32> = rgba
         .chunks_exact(4)
         .enumerate()
-        .filter(|(i, _)| i % width.max(1) < columns)
+        .filter(|(i, p)| i % width.max(1) < columns && p[..3] != [0, 0, 0])
         .step_by(STRIDE)
         .map(|(_, p)| {
             let [r, g, b] = [p[0], p[1], p[2]].map(|c| srgb_to_linear(f32::from(c) / 255.0));
@@ -30,7 +31,8 @@ pub fn correction(rgba: &[u8], width: usize, columns: usize) -> f32 {
         })
         .collect();
     if luminance.is_empty() {
-        return 0.0;
+        // Nothing but black: as dark as can be.
+        return MAX_STEP;
     }
     let middle = luminance.len() / 2;
     let (_, median, _) = luminance.select_nth_unstable_by(middle, f32::total_cmp);
@@ -69,17 +71,17 @@ mod tests {
     fn the_median_ignores_a_bright_light_and_a_black_background() {
         let mut frame = grey(400, 118);
         frame.extend(grey(150, 255));
-        frame.extend(grey(150, 0));
+        frame.extend(grey(150, 1));
+        frame.extend(grey(600, 0));
         assert!(correction(&frame, 10, 10).abs() < 0.01, "{}", correction(&frame, 10, 10));
     }
 
     #[test]
     fn only_the_columns_left_of_the_panel_count() {
-        // Rows of 8: 6 mid-grey pixels, then 2 black ones under the panel.
-        let row = [grey(6, 118), grey(2, 0)].concat();
+        // Rows of 8: 2 mid-grey pixels, then 6 dark ones under the panel.
+        let row = [grey(2, 118), grey(6, 10)].concat();
         let frame = row.repeat(16);
-        assert!(correction(&frame, 8, 6).abs() < 0.01);
-        assert_eq!(correction(&frame, 8, 2), correction(&grey(4, 118), 2, 2));
-        assert!(correction(&frame, 8, 8) > 0.1, "the black columns count when asked to");
+        assert!(correction(&frame, 8, 2).abs() < 0.01);
+        assert!(correction(&frame, 8, 8) > 0.1, "the dark columns count when asked to");
     }
 }

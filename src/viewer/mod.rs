@@ -139,6 +139,8 @@ impl Session {
                     Action::Resize(w, h) => requests.resize = Some((*w, *h)),
                     Action::Screenshot(path) => screenshots.push(path.clone()),
                     Action::Quit => requests.quit = true,
+                    Action::Panel(on) => self.panel.shown = *on,
+                    Action::Boxes(on) => self.panel.boxes = *on,
                     action => {
                         self.state.apply(action, t).with_context(|| format!("script event at {} s", event.time))?
                     }
@@ -156,7 +158,7 @@ impl Session {
             self.state.exposure_step(stops);
         }
         let columns = (self.panel.left_edge() * ppp).round().clamp(1.0, extent.width as f32) as u32;
-        let meter = (self.state.auto_exposure && self.frame % METER_FRAMES == 0).then_some(columns);
+        let meter = (self.state.auto_exposure && self.frame.is_multiple_of(METER_FRAMES)).then_some(columns);
         self.state.update(&self.held, dt as f32, t);
         let last = self.plan.last_frame().is_some_and(|n| self.frame + 1 >= n);
         if let (true, Some(path)) = (last, &self.plan.screenshot) {

@@ -90,7 +90,8 @@ impl Panel {
         let primitives = self.ctx.tessellate(output.shapes, output.pixels_per_point);
         let screen = self.ctx.content_rect().size();
         let mut frame = ui_frame(&primitives, output.pixels_per_point, [screen.x, screen.y]);
-        frame.texels = output.textures_delta.set.iter().flat_map(|(id, deltas)| deltas.iter().map(|d| texels(*id, d))).collect();
+        frame.texels =
+            output.textures_delta.set.iter().flat_map(|(id, deltas)| deltas.iter().map(|d| texels(*id, d))).collect();
         frame.freed = output.textures_delta.free.iter().map(|id| texture_number(*id)).collect();
         (frame, output.platform_output)
     }
@@ -223,7 +224,13 @@ fn gpu_graph(ui: &mut egui::Ui, stats: &Stats) {
             y -= h;
         }
     }
-    painter.text(rect.left_top() + egui::vec2(3.0, 2.0), egui::Align2::LEFT_TOP, format!("{top} ms"), egui::FontId::monospace(10.0), Color32::WHITE);
+    painter.text(
+        rect.left_top() + egui::vec2(3.0, 2.0),
+        egui::Align2::LEFT_TOP,
+        format!("{top} ms"),
+        egui::FontId::monospace(10.0),
+        Color32::WHITE,
+    );
     let recent = stats.recent_gpu_ms();
     for (k, name) in TIMED_PASSES.iter().enumerate() {
         ui.horizontal(|ui| {
@@ -256,11 +263,13 @@ fn outline_boxes(ctx: &egui::Context, state: &ViewerState, m: &[[f32; 4]; 4]) {
 
 /// The twelve edges of a box.
 fn box_edges(b: &Aabb) -> Vec<[Vec3; 2]> {
-    let corner = |i: usize| Vec3::new(
-        if i & 1 == 0 { b.min.x } else { b.max.x },
-        if i & 2 == 0 { b.min.y } else { b.max.y },
-        if i & 4 == 0 { b.min.z } else { b.max.z },
-    );
+    let corner = |i: usize| {
+        Vec3::new(
+            if i & 1 == 0 { b.min.x } else { b.max.x },
+            if i & 2 == 0 { b.min.y } else { b.max.y },
+            if i & 4 == 0 { b.min.z } else { b.max.z },
+        )
+    };
     let mut edges = Vec::with_capacity(12);
     for i in 0..8 {
         for axis in [1, 2, 4] {
@@ -346,9 +355,11 @@ fn ui_frame(primitives: &[egui::ClippedPrimitive], pixels_per_point: f32, screen
             vertex_offset: frame.vertices.len() as i32,
         });
         frame.indices.extend_from_slice(&mesh.indices);
-        frame.vertices.extend(
-            mesh.vertices.iter().map(|v| UiVertex { pos: [v.pos.x, v.pos.y], uv: [v.uv.x, v.uv.y], colour: v.color.to_array() }),
-        );
+        frame.vertices.extend(mesh.vertices.iter().map(|v| UiVertex {
+            pos: [v.pos.x, v.pos.y],
+            uv: [v.uv.x, v.uv.y],
+            colour: v.color.to_array(),
+        }));
     }
     frame
 }

@@ -51,9 +51,13 @@ pub enum Action {
     LightScale(Vec3),
     Component(Shown),
     Exposure(f32),
+    AutoExposure,
     Resize(u32, u32),
     Screenshot(PathBuf),
     Overlay(bool),
+    Panel(bool),
+    /// Outlines of the trained boxes.
+    Boxes(bool),
     Quit,
 }
 
@@ -105,7 +109,7 @@ impl Script {
 }
 
 /// The script's commands.
-const COMMANDS: [&str; 12] = [
+const COMMANDS: [&str; 14] = [
     "camera",
     "light",
     "add-light",
@@ -117,8 +121,18 @@ const COMMANDS: [&str; 12] = [
     "resize",
     "screenshot",
     "overlay",
+    "panel",
+    "boxes",
     "quit",
 ];
+
+fn on_off(word: &str) -> Result<bool> {
+    match word {
+        "on" => Ok(true),
+        "off" => Ok(false),
+        _ => bail!("expected on or off, not {word:?}"),
+    }
+}
 
 fn parse_line(line: &str) -> Result<Event> {
     let words: Vec<&str> = line.split_whitespace().collect();
@@ -177,6 +191,7 @@ fn parse_line(line: &str) -> Result<Event> {
             "indirect" => Shown::Indirect,
             _ => bail!("component {name:?}: expected gi, direct or indirect"),
         }),
+        ("exposure", ["auto"]) => Action::AutoExposure,
         ("exposure", [ev]) => Action::Exposure(parse_exposure(ev).map_err(|e| anyhow!("exposure {e}"))?),
         ("resize", [size]) => {
             let (w, h) = parse_size(size)?;
@@ -190,6 +205,8 @@ fn parse_line(line: &str) -> Result<Event> {
         }
         ("overlay", ["on"]) => Action::Overlay(true),
         ("overlay", ["off"]) => Action::Overlay(false),
+        ("panel", [on]) => Action::Panel(on_off(on)?),
+        ("boxes", [on]) => Action::Boxes(on_off(on)?),
         ("quit", []) => Action::Quit,
         (c, _) if COMMANDS.contains(&c) => bail!("wrong arguments for {c}; see `rrf view --help`"),
         (c, _) => bail!("unknown command {c:?}; expected {}", COMMANDS.join(", ")),

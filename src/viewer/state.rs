@@ -347,9 +347,13 @@ impl ViewerState {
             Action::RemoveLight => self.remove_light()?,
             Action::LightScale(scale) => self.set_light_scale(scale)?,
             Action::Component(shown) => self.shown = shown,
-            Action::Exposure(ev) => self.exposure = ev,
+            Action::Exposure(ev) => {
+                self.exposure = ev;
+                self.auto_exposure = false;
+            }
+            Action::AutoExposure => self.auto_exposure = true,
             Action::Overlay(on) => self.overlay = on,
-            Action::Resize(..) | Action::Screenshot(_) | Action::Quit => {}
+            Action::Resize(..) | Action::Screenshot(_) | Action::Panel(_) | Action::Boxes(_) | Action::Quit => {}
         }
         Ok(())
     }

@@ -252,7 +252,8 @@ impl UiPass {
     fn create_texture(&self, ctx: &Context, extent: vk::Extent2D) -> Result<UiTexture> {
         let usage = vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST;
         let image = ctx.guard(ctx.create_image("ui texture", extent, vk::Format::R8G8B8A8_UNORM, usage)?);
-        let set = BoundSet::new(ctx, "ui texture", &[Bind::Sampled(&image, self.sampler)], vk::ShaderStageFlags::FRAGMENT)?;
+        let set =
+            BoundSet::new(ctx, "ui texture", &[Bind::Sampled(&image, self.sampler)], vk::ShaderStageFlags::FRAGMENT)?;
         Ok(UiTexture { image: image.keep(), set })
     }
 
@@ -329,9 +330,7 @@ impl UiPass {
     }
 
     fn texture(&self, id: u64) -> Result<&UiTexture> {
-        self.textures
-            .get(&id)
-            .ok_or_else(|| crate::Error::Invalid(format!("UI texture {id} was never given texels")))
+        self.textures.get(&id).ok_or_else(|| crate::Error::Invalid(format!("UI texture {id} was never given texels")))
     }
 
     fn record(
@@ -449,7 +448,12 @@ fn copy_texels(ctx: &Context, cmd: vk::CommandBuffer, staging: &Buffer, image: &
 
 /// The pipeline: triangles, no culling, no depth, premultiplied-alpha blending; viewport and
 /// scissor dynamic.
-fn create_pipeline(ctx: &Context, layout: vk::PipelineLayout, vertex: &[u32], fragment: &[u32]) -> Result<vk::Pipeline> {
+fn create_pipeline(
+    ctx: &Context,
+    layout: vk::PipelineLayout,
+    vertex: &[u32],
+    fragment: &[u32],
+) -> Result<vk::Pipeline> {
     ctx.step("vkCreateGraphicsPipelines")?;
     let vs = ctx.create_shader_module(vertex)?;
     let fs = match ctx.create_shader_module(fragment) {
