@@ -69,6 +69,15 @@ impl DirectMode {
         Ok(())
     }
 
+    /// Whether the network pass `variant` can light this way: analytic direct light needs
+    /// the tiled or per-object variant.
+    pub fn check_variant(self, variant: Variant) -> Result<()> {
+        if self == DirectMode::Analytic && variant == Variant::Storage {
+            anyhow::bail!("analytic direct light needs the tiled or per-object network pass, not {}", variant.name());
+        }
+        Ok(())
+    }
+
     /// The CPU inference's mode for `scene`.
     pub fn cpu(self, scene: &Scene) -> rrf_baker::predict::Direct {
         match self.resolve(scene, None) {

@@ -322,3 +322,45 @@ fn automatic_exposure_brings_a_dark_frame_to_mid_grey() {
         let _ = std::fs::remove_file(f);
     }
 }
+
+/// Switching direct light makes the frame again; the result is the frame that starts that
+/// way, and the panel's texts (whose font texture the new frame inherits) still draw.
+#[test]
+fn switching_direct_light_gives_the_frame_that_starts_that_way() {
+    let (switched, fresh) = (temp("switched.png"), temp("fresh.png"));
+    let shoot = |direct: &str, events: &str, shot: &Path| {
+        let path = temp(&format!("{}.txt", shot.file_stem().unwrap().to_string_lossy()));
+        std::fs::write(&path, format!("0 panel on\n{events}0.15 screenshot {}\n", shot.display())).unwrap();
+        let args =
+            ["view", "scenes/many-objects", "--headless", "--size", "480x270", "--no-overlay", "--direct", direct];
+        let run = rrf(&[&args[..], &["--script", path.to_str().unwrap()]].concat(), &[("RRF_VALIDATION", "required")]);
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        let _ = std::fs::remove_file(path);
+        load(shot)
+    };
+    let switched_image = shoot("analytic", "0.05 direct learned\n", &switched);
+    let fresh_image = shoot("learned", "", &fresh);
+    // The same pixels everywhere but the panel's frame-rate line.
+    let differing: Vec<(u32, u32)> = switched_image
+        .enumerate_pixels()
+        .filter(|(x, y, p)| p.0 != fresh_image.get_pixel(*x, *y).0)
+        .map(|(x, y, _)| (x, y))
+        .collect();
+    assert!(
+        differing.iter().all(|&(x, y)| x >= 210 && y < 45),
+        "pixels differ outside the frame-rate line: {:?}",
+        &differing[..differing.len().min(5)]
+    );
+    let script = temp("bad-direct.txt");
+    std::fs::write(&script, "0.05 direct analytic\n").unwrap();
+    let run =
+        rrf(&["view", "scenes/gallery", "--headless", "--size", "32x32", "--script", script.to_str().unwrap()], &[]);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        !run.status.success() && stderr.contains("direct analytic") && stderr.contains("script event at 0.05 s"),
+        "{stderr}"
+    );
+    for f in [switched, fresh, script] {
+        let _ = std::fs::remove_file(f);
+    }
+}

@@ -215,19 +215,35 @@ impl Frame {
             reflection: reflection.keep(),
             states: RefCell::default(),
         };
-        frame.register();
+        frame.register(&mut frame.states.borrow_mut());
         Ok(frame)
     }
 
-    /// Tells the barrier tracker where set-up left every image.
-    fn register(&self) {
-        let mut states = self.states.borrow_mut();
-        self.targets.register(&mut states);
-        self.network.register(&mut states);
+    /// Tells `states` where set-up left every image of the frame.
+    fn register(&self, states: &mut ResourceStates) {
+        self.targets.register(states);
+        self.network.register(states);
         if let Some(r) = &self.reflection {
-            r.targets.register(&mut states);
+            r.targets.register(states);
         }
         states.set_layout(&self.ldr, vk::ImageLayout::GENERAL);
+    }
+
+    /// The frame's own images, as a tracker that knows only them.
+    fn own_images(&self) -> ResourceStates {
+        let mut own = ResourceStates::default();
+        self.register(&mut own);
+        own
+    }
+
+    /// Takes over what `old`, a frame this one replaces, knew of resources that are not its
+    /// own (those of passes drawn with it, such as the user interface's textures), so that
+    /// their contents and layouts carry over.
+    pub fn carry_states(&self, old: &Frame) {
+        let mut states = old.states.take();
+        states.forget_all(&old.own_images());
+        self.register(&mut states);
+        *self.states.borrow_mut() = states;
     }
 
     /// Tells the barrier tracker that `resource` was just made (see
@@ -256,6 +272,7 @@ impl Frame {
         if extent == self.extent() {
             return Ok(());
         }
+        let old = self.own_images();
         let targets = ctx.guard(GBufferTargets::new(ctx, extent, self.targets.mirrors)?);
         let ldr = ctx.guard(create_ldr(ctx, extent)?);
         let display = self.network.outputs().is_none().then_some(&*ldr);
@@ -270,8 +287,10 @@ impl Frame {
             pass.rebind(ctx, hdr, &self.ldr);
         }
         self.overlay.rebind(ctx, &self.ldr);
-        *self.states.borrow_mut() = ResourceStates::default();
-        self.register();
+        // What the tracker knew of the old images goes; what it knows of others stays.
+        let mut states = self.states.borrow_mut();
+        states.forget_all(&old);
+        self.register(&mut states);
         Ok(())
     }
 

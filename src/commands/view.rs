@@ -10,6 +10,7 @@ use rrf_renderer::{backend::swapchain, vk, Context, ContextOptions};
 use super::image_args::named_view;
 use super::scene_args::SceneArgs;
 use super::variant::VariantArg;
+use crate::direct_mode::DirectMode;
 use crate::parse::parse_size;
 use crate::viewer::controls::HELP_TEXT;
 use crate::viewer::gpu::ViewerGpu;
@@ -107,6 +108,7 @@ time, which advances by 1/60 s per frame whatever the frame rate; # starts a com
   remove-light                   remove the selected light (not the last)
   light-color R,G,B [intensity K]   the selected light's colour (each 0 to 1) and intensity
   component gi|direct|indirect   which light is shown
+  direct learned|analytic        where direct light comes from (the frame is made again)
   exposure EV|auto               exposure in stops, or automatic
   resize WxH                     window (or headless frame) size in pixels
   screenshot FILE.png            save the frame as shown
@@ -136,6 +138,17 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let direct = args.input.direct.resolve(&scene, Some(args.variant.0));
     direct.check(&scene, &model)?;
     let mut state = ViewerState::new(&scene, view, lights);
+    state.direct_choices = [DirectMode::Learned, DirectMode::Analytic]
+        .into_iter()
+        .map(|mode| {
+            (
+                mode,
+                mode.check(&scene, &model)
+                    .and_then(|()| mode.check_variant(args.variant.0))
+                    .map_err(|e| format!("{e:#}")),
+            )
+        })
+        .collect();
     state.overlay = !args.no_overlay;
     state.direct = direct;
     if let Some(dir) = &args.record {
@@ -180,7 +193,8 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     startup.phase("Vulkan");
     let extent = vk::Extent2D { width: size.0, height: size.1 };
     eprintln!("{} on {} ({} network pass)", scene.name, ctx.info.name, args.variant.0.name());
-    let mut gpu = ViewerGpu::new(ctx, &scene, &model, (args.variant.0, direct), extent)?;
+    let title = format!("rrf view: {}", scene.name);
+    let mut gpu = ViewerGpu::new(ctx, scene, model, (args.variant.0, direct), extent)?;
     startup.phase("frame set-up");
     let panel_shown = args.panel || (event_loop.is_some() && !plan.scripted() && !args.no_panel);
     // The panel names the keys; the overlay's list of them starts hidden beside it.
@@ -189,10 +203,7 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let panel = Panel::new(panel_shown);
     let mut session = Session::new(state, panel, plan, startup);
     let ran = match event_loop {
-        Some(event_loop) => {
-            let title = format!("rrf view: {}", scene.name);
-            window::run(event_loop, &mut gpu, &mut session, title, size, args.present_mode.vk())
-        }
+        Some(event_loop) => window::run(event_loop, &mut gpu, &mut session, title, size, args.present_mode.vk()),
         None => run_headless(&mut gpu, &mut session),
     };
     let summary = session.summary();

@@ -24,6 +24,10 @@ use crate::shaders;
 
 pub struct ViewerGpu {
     pub ctx: Context,
+    /// What the frame is made from, to make it again with other direct light.
+    scene: Scene,
+    model: Model,
+    direct: DirectMode,
     frame: Option<SceneFrame>,
     ui: Option<UiPass>,
     ring: Option<FrameLoop>,
@@ -40,12 +44,12 @@ impl ViewerGpu {
     /// The frame for `scene` at `extent`, with frames in flight.
     pub fn new(
         ctx: Context,
-        scene: &Scene,
-        model: &Model,
+        scene: Scene,
+        model: Model,
         (variant, direct): (Variant, DirectMode),
         extent: vk::Extent2D,
     ) -> Result<Self> {
-        let frame = SceneFrame::new(&ctx, scene, model, variant, extent, FrameOutput::Display, direct)?;
+        let frame = SceneFrame::new(&ctx, &scene, &model, variant, extent, FrameOutput::Display, direct)?;
         let ui = UiPass::new(&ctx, shaders::UI_VERT, shaders::UI_FRAG);
         let ring = ui.and_then(|ui| match FrameLoop::new(&ctx, TIMESTAMPS) {
             Ok(ring) => Ok((ui, ring)),
@@ -64,6 +68,9 @@ impl ViewerGpu {
         let period_ns = ctx.info.limits.timestamp_period_ns.map(f64::from);
         Ok(ViewerGpu {
             ctx,
+            scene,
+            model,
+            direct,
             frame: Some(frame),
             ui: Some(ui),
             ring: Some(ring),
@@ -75,6 +82,27 @@ impl ViewerGpu {
 
     fn parts(&mut self) -> (&Context, &mut SceneFrame, &mut FrameLoop) {
         (&self.ctx, self.frame.as_mut().expect("live until finish"), self.ring.as_mut().expect("live until finish"))
+    }
+
+    /// Where the frame's direct light comes from.
+    pub fn direct(&self) -> DirectMode {
+        self.direct
+    }
+
+    /// Makes the frame again with direct light from `direct`, after the frames in flight have
+    /// finished. On failure the frame stays as it was.
+    pub fn set_direct(&mut self, direct: DirectMode) -> Result<()> {
+        direct.check(&self.scene, &self.model)?;
+        direct.check_variant(self.variant())?;
+        let (variant, extent) = (self.variant(), self.extent());
+        let ctx = &self.ctx;
+        self.ring.as_mut().expect("live until finish").wait_all(ctx)?;
+        let made = SceneFrame::new(ctx, &self.scene, &self.model, variant, extent, FrameOutput::Display, direct)?;
+        let old = self.frame.replace(made).expect("live until finish");
+        self.frame.as_ref().expect("just made").gpu.carry_states(&old.gpu);
+        old.destroy(ctx);
+        self.direct = direct;
+        Ok(())
     }
 
     /// The exposure change in stops that the last metered frame asks for, once.

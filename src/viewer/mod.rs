@@ -158,6 +158,13 @@ impl Session {
             self.state.exposure_step(stops);
         }
         let columns = (self.panel.left_edge() * ppp).round().clamp(1.0, extent.width as f32) as u32;
+        if self.state.direct != gpu.direct() {
+            // Remakes the frame: its network pipelines are made again as they come into view.
+            if let Err(e) = gpu.set_direct(self.state.direct) {
+                self.state.light_note = Some(format!("{e:#}"));
+                self.state.direct = gpu.direct();
+            }
+        }
         let meter = (self.state.auto_exposure && self.frame.is_multiple_of(METER_FRAMES)).then_some(columns);
         self.state.update(&self.held, dt as f32, t);
         let last = self.plan.last_frame().is_some_and(|n| self.frame + 1 >= n);

@@ -117,7 +117,16 @@ fn settings(ui: &mut egui::Ui, state: &mut ViewerState, stats: &Stats, timed: bo
             .on_hover_text("Keeps the frame's mean brightness at mid-grey, as a camera does.");
     });
     egui::CollapsingHeader::new("Direct light").default_open(true).show(ui, |ui| {
-        ui.label(format!("{}, chosen at start (--direct)", state.direct.description()));
+        for (mode, allowed) in state.direct_choices.clone() {
+            let choice =
+                ui.add_enabled(allowed.is_ok(), egui::RadioButton::new(state.direct == mode, mode.description()));
+            if choice.clicked() {
+                state.direct = mode;
+            }
+            if let Err(why) = allowed {
+                choice.on_disabled_hover_text(why);
+            }
+        }
     });
     egui::CollapsingHeader::new("Trained boxes").default_open(true).show(ui, |ui| {
         ui.checkbox(boxes, "outline them over the frame");

@@ -19,6 +19,7 @@
 //! | `overlay on\|off` | shows or hides the overlay |
 //! | `quit` | ends the run (otherwise it ends one frame after the last event) |
 
+use crate::direct_mode::DirectMode;
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail, Context, Result};
@@ -50,6 +51,8 @@ pub enum Action {
     /// Colour × intensity.
     LightScale(Vec3),
     Component(Shown),
+    /// Where direct light comes from (the frame is made again).
+    Direct(DirectMode),
     Exposure(f32),
     AutoExposure,
     Resize(u32, u32),
@@ -109,7 +112,7 @@ impl Script {
 }
 
 /// The script's commands.
-const COMMANDS: [&str; 14] = [
+const COMMANDS: [&str; 15] = [
     "camera",
     "light",
     "add-light",
@@ -117,6 +120,7 @@ const COMMANDS: [&str; 14] = [
     "remove-light",
     "light-color",
     "component",
+    "direct",
     "exposure",
     "resize",
     "screenshot",
@@ -191,6 +195,8 @@ fn parse_line(line: &str) -> Result<Event> {
             "indirect" => Shown::Indirect,
             _ => bail!("component {name:?}: expected gi, direct or indirect"),
         }),
+        ("direct", ["learned"]) => Action::Direct(DirectMode::Learned),
+        ("direct", ["analytic"]) => Action::Direct(DirectMode::Analytic),
         ("exposure", ["auto"]) => Action::AutoExposure,
         ("exposure", [ev]) => Action::Exposure(parse_exposure(ev).map_err(|e| anyhow!("exposure {e}"))?),
         ("resize", [size]) => {

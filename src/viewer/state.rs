@@ -78,8 +78,10 @@ pub struct ViewerState {
     pub auto_exposure: bool,
     pub overlay: bool,
     pub help: bool,
-    /// Where direct light comes from, for the overlay.
+    /// Where direct light comes from (the panel can change it).
     pub direct: DirectMode,
+    /// The modes the panel offers, each with why it cannot be chosen, if it cannot.
+    pub direct_choices: Vec<(DirectMode, Result<(), String>)>,
     camera_tween: Option<Tween>,
     light_tween: Option<Tween>,
 }
@@ -116,6 +118,7 @@ impl ViewerState {
             overlay: true,
             help: true,
             direct: DirectMode::Learned,
+            direct_choices: Vec::new(),
             camera_tween: None,
             light_tween: None,
             home: view,
@@ -347,6 +350,10 @@ impl ViewerState {
             Action::RemoveLight => self.remove_light()?,
             Action::LightScale(scale) => self.set_light_scale(scale)?,
             Action::Component(shown) => self.shown = shown,
+            Action::Direct(mode) => match self.direct_choices.iter().find(|(m, _)| *m == mode) {
+                Some((_, Err(why))) => bail!("direct {}: {why}", mode.name()),
+                _ => self.direct = mode,
+            },
             Action::Exposure(ev) => {
                 self.exposure = ev;
                 self.auto_exposure = false;

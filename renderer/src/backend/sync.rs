@@ -225,6 +225,12 @@ impl ResourceStates {
         self.states.remove(&resource);
     }
 
+    /// Forgets every resource that `others` knows: those of a part of the frame that is
+    /// destroyed, whose handles new resources may reuse.
+    pub fn forget_all(&mut self, others: &ResourceStates) {
+        self.states.retain(|resource, _| !others.states.contains_key(resource));
+    }
+
     /// Updates the states for `uses` and returns the barriers they need.
     fn barriers(&mut self, uses: &[Use]) -> Barriers {
         let mut merged: Vec<Use> = Vec::with_capacity(uses.len());
