@@ -116,6 +116,10 @@ fn settings(ui: &mut egui::Ui, state: &mut ViewerState, stats: &Stats, timed: bo
         ui.checkbox(&mut state.auto_exposure, "automatic exposure")
             .on_hover_text("Keeps the frame's mean brightness at mid-grey, as a camera does.");
     });
+    egui::CollapsingHeader::new("GPU time per pass").default_open(true).show(ui, |ui| match timed {
+        true => gpu_graph(ui, stats),
+        false => drop(ui.label("This device writes no timestamps.")),
+    });
     egui::CollapsingHeader::new("Direct light").default_open(true).show(ui, |ui| {
         for (mode, allowed) in state.direct_choices.clone() {
             let choice =
@@ -139,10 +143,6 @@ fn settings(ui: &mut egui::Ui, state: &mut ViewerState, stats: &Stats, timed: bo
         if state.camera_box().is_some_and(|b| !b.contains(state.eye)) {
             ui.colored_label(Color32::YELLOW, "The camera is outside its box: expect errors.");
         }
-    });
-    egui::CollapsingHeader::new("GPU time per pass").default_open(true).show(ui, |ui| match timed {
-        true => gpu_graph(ui, stats),
-        false => drop(ui.label("This device writes no timestamps.")),
     });
     ui.separator();
     ui.label("U hides this panel; H lists the keys.");
@@ -218,9 +218,9 @@ fn gpu_graph(ui: &mut egui::Ui, stats: &Stats) {
     }
     let first = frames.saturating_sub(GRAPH_FRAMES);
     let totals: Vec<f64> = (first..frames).map(|f| stats.gpu_ms.iter().map(|ms| ms[f]).sum()).collect();
-    // The scale: the largest frame, rounded up to 1, 2 or 5 times a power of ten.
+    // The scale: the largest frame, rounded up to 1, 2, 2.5 or 5 times a power of ten.
     let top = nice_ceiling(totals.iter().copied().fold(0.0, f64::max));
-    let (rect, _) = ui.allocate_exact_size(egui::vec2(ui.available_width(), 70.0), egui::Sense::hover());
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(ui.available_width(), 60.0), egui::Sense::hover());
     let painter = ui.painter_at(rect);
     painter.rect_filled(rect, 2.0, Color32::from_gray(20));
     let bar = rect.width() / GRAPH_FRAMES as f32;
@@ -249,11 +249,11 @@ fn gpu_graph(ui: &mut egui::Ui, stats: &Stats) {
     }
 }
 
-/// The smallest of 1, 2 and 5 times a power of ten that is at least `x`.
+/// The smallest of 1, 2, 2.5 and 5 times a power of ten that is at least `x`.
 fn nice_ceiling(x: f64) -> f64 {
     let x = x.max(1e-3);
     let decade = 10f64.powf(x.log10().floor());
-    [1.0, 2.0, 5.0, 10.0].into_iter().map(|m| m * decade).find(|v| *v >= x * (1.0 - 1e-9)).unwrap_or(10.0 * decade)
+    [1.0, 2.0, 2.5, 5.0, 10.0].into_iter().map(|m| m * decade).find(|v| *v >= x * (1.0 - 1e-9)).unwrap_or(10.0 * decade)
 }
 
 /// Outlines the light's and the camera's trained boxes over the frame, behind the panel.
@@ -378,10 +378,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn graph_scale_is_one_two_or_five_times_a_power_of_ten() {
+    fn graph_scale_is_one_two_two_and_a_half_or_five_times_a_power_of_ten() {
         assert_eq!(nice_ceiling(0.7), 1.0);
         assert_eq!(nice_ceiling(1.0), 1.0);
         assert_eq!(nice_ceiling(1.2), 2.0);
+        assert_eq!(nice_ceiling(2.2), 2.5);
         assert_eq!(nice_ceiling(37.0), 50.0);
         assert_eq!(nice_ceiling(60.0), 100.0);
     }
