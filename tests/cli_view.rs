@@ -364,3 +364,38 @@ fn switching_direct_light_gives_the_frame_that_starts_that_way() {
         let _ = std::fs::remove_file(f);
     }
 }
+
+/// A click on the panel's "add" button (xdotool, on a fresh Xvfb display) adds a light: the
+/// mouse reaches egui through the window, and the frame then has two lights.
+#[test]
+fn a_click_on_the_panel_adds_a_light() {
+    let shot = temp("click.png");
+    let script = temp("click.txt");
+    let log = temp("click.log");
+    // Script time runs on while the click is on its way; the run ends by itself.
+    std::fs::write(&script, format!("4 screenshot {}\n", shot.display())).unwrap();
+    let rrf_bin = env!("CARGO_BIN_EXE_rrf");
+    // The click waits for the first frame (start-up is printed after it) and one more, so that
+    // egui has laid the panel out. At 480×270 the panel's left edge is at x = 210 and its
+    // "add" button at about (251, 95).
+    let run = format!(
+        "{rrf_bin} view scenes/cornell-box --size 480x270 --panel --no-overlay --script {} 2>{} & pid=$!; \
+         until grep -q start-up {} || ! kill -0 $pid 2>/dev/null; do sleep 0.2; done; sleep 1; xdotool mousemove 251 95 click 1; wait $pid",
+        script.display(),
+        log.display(),
+        log.display()
+    );
+    let xvfb = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 1024x768x24", "bash", "-c", &run])
+        .env("RRF_DEVICE", "llvmpipe")
+        .env("RRF_VALIDATION", "required")
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .status()
+        .unwrap_or_else(|e| panic!("cannot run xvfb-run ({e}); install Xvfb and xdotool with `cargo xtask setup`"));
+    let stderr = std::fs::read_to_string(&log).unwrap_or_default();
+    assert!(xvfb.success(), "rrf view failed:\n{stderr}");
+    assert!(stderr.contains("first frame with several lights"), "the click added no light:\n{stderr}");
+    for f in [shot, script, log] {
+        let _ = std::fs::remove_file(f);
+    }
+}

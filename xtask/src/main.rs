@@ -24,9 +24,9 @@ const RUN_PACKAGES: &[&str] = &[
     "libxkbcommon-x11-0",
 ];
 /// What the tests need on top: the Khronos validation layer, which every GPU test runs under,
-/// a C++ compiler for the vendored glslang, and Xvfb (with xauth, which xvfb-run needs) for
-/// the viewer's window tests.
-const TEST_PACKAGES: &[&str] = &["vulkan-validationlayers", "g++", "xvfb", "xauth"];
+/// a C++ compiler for the vendored glslang, Xvfb (with xauth, which xvfb-run needs) for the
+/// viewer's window tests, and xdotool, which clicks in the window.
+const TEST_PACKAGES: &[&str] = &["vulkan-validationlayers", "g++", "xvfb", "xauth", "xdotool"];
 
 /// A one-node Slurm cluster for `slurm-bake`.
 const SLURM_PACKAGES: &[&str] = &["slurm-wlm", "munge"];
