@@ -365,25 +365,31 @@ fn switching_direct_light_gives_the_frame_that_starts_that_way() {
     }
 }
 
-/// A click on the panel's "add" button (xdotool, on a fresh Xvfb display) adds a light: the
-/// mouse reaches egui through the window, and the frame then has two lights.
-#[test]
-fn a_click_on_the_panel_adds_a_light() {
-    let shot = temp("click.png");
-    let script = temp("click.txt");
-    let log = temp("click.log");
-    // Script time runs on while the click is on its way; the run ends by itself.
-    std::fs::write(&script, format!("4 screenshot {}\n", shot.display())).unwrap();
+/// Runs the Cornell box at 480×270 with the panel in a window on a fresh Xvfb display, playing
+/// `script`; once the panel is laid out, xdotool gives the window the keyboard focus (there is
+/// no window manager to) and does `actions` (xdotool commands), if any. Returns stderr.
+/// At this size the panel's left edge is at x = 210 and its "add" button at about (251, 95).
+fn panel_run(script: &str, actions: &str) -> String {
+    let name = format!("xdotool-{}-{}", script.len(), actions.len());
+    let (path, log) = (temp(&format!("{name}.txt")), temp(&format!("{name}.log")));
+    // Script time runs on while xdotool acts; the run ends by itself.
+    std::fs::write(&path, script).unwrap();
     let rrf_bin = env!("CARGO_BIN_EXE_rrf");
-    // The click waits for the first frame (start-up is printed after it) and one more, so that
-    // egui has laid the panel out. At 480×270 the panel's left edge is at x = 210 and its
-    // "add" button at about (251, 95).
+    // The actions wait for the first frame (start-up is printed after it) and one more, so
+    // that egui has laid the panel out.
+    let xdotool = match actions {
+        "" => String::new(),
+        _ => format!(
+            "until grep -q start-up {} || ! kill -0 $pid 2>/dev/null; do sleep 0.2; done; sleep 1; \
+             xdotool search --name 'rrf view' windowfocus --sync; xdotool {actions}; ",
+            log.display()
+        ),
+    };
     let run = format!(
         "{rrf_bin} view scenes/cornell-box --size 480x270 --panel --no-overlay --script {} 2>{} & pid=$!; \
-         until grep -q start-up {} || ! kill -0 $pid 2>/dev/null; do sleep 0.2; done; sleep 1; xdotool mousemove 251 95 click 1; wait $pid",
-        script.display(),
+         {xdotool}wait $pid",
+        path.display(),
         log.display(),
-        log.display()
     );
     let xvfb = Command::new("xvfb-run")
         .args(["-a", "-s", "-screen 0 1024x768x24", "bash", "-c", &run])
@@ -394,8 +400,49 @@ fn a_click_on_the_panel_adds_a_light() {
         .unwrap_or_else(|e| panic!("cannot run xvfb-run ({e}); install Xvfb and xdotool with `cargo xtask setup`"));
     let stderr = std::fs::read_to_string(&log).unwrap_or_default();
     assert!(xvfb.success(), "rrf view failed:\n{stderr}");
-    assert!(stderr.contains("first frame with several lights"), "the click added no light:\n{stderr}");
-    for f in [shot, script, log] {
+    for f in [path, log] {
         let _ = std::fs::remove_file(f);
+    }
+    stderr
+}
+
+/// A click on the panel's "add" button adds a light: the mouse reaches egui through the
+/// window, and the frame then has two lights.
+#[test]
+fn a_click_on_the_panel_adds_a_light() {
+    let stderr = panel_run("4 quit\n", "mousemove 251 95 click 1");
+    assert!(stderr.contains("first frame with several lights"), "the click added no light:\n{stderr}");
+}
+
+/// The walkthrough's keys reach it while the panel shows, Tab included (egui would take Tab
+/// for its own focus): after a click on "add" (light 2 selected), Tab selects light 1 and C
+/// makes it warm; the panel then shows what a script that does the same shows.
+#[test]
+fn keys_reach_the_walkthrough_beside_the_panel() {
+    let (keys, scripted) = (temp("keys.png"), temp("scripted.png"));
+    panel_run(
+        &format!("4 screenshot {}\n", keys.display()),
+        "mousemove 251 95 click 1 sleep 0.5 mousemove 100 200 key Tab sleep 0.3 key c",
+    );
+    let light = "0.278,0.5478,0.2795";
+    panel_run(
+        &format!(
+            "0 add-light {light}\n0 select-light 1\n0 light-color 1,0.75,0.5\n4 screenshot {}\n",
+            scripted.display()
+        ),
+        "",
+    );
+    let (keys, scripted) = (load(&keys), load(&scripted));
+    // The lights' labels (which is selected) and the selected light's colour swatch.
+    for (x0, y0, x1, y1) in [(230, 62, 340, 86), (235, 188, 280, 206)] {
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let (a, b) = (keys.get_pixel(x, y).0, scripted.get_pixel(x, y).0);
+                assert!(
+                    a.iter().zip(b).all(|(a, b)| a.abs_diff(b) <= 2),
+                    "({x}, {y}): {a:?} after the keys, {b:?} scripted"
+                );
+            }
+        }
     }
 }

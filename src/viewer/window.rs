@@ -170,10 +170,14 @@ impl ApplicationHandler for App<'_> {
     }
 
     fn window_event(&mut self, event_loop: &ActiveEventLoop, _id: WindowId, event: WindowEvent) {
-        // What the panel takes (a click on it, a key while a field has the focus) goes no
-        // further.
-        let to_panel = match (&mut self.egui, &self.window) {
-            (Some(egui), Some(window)) => egui.on_window_event(window, &event).consumed,
+        // What the panel takes (a click or the wheel over it, a key while one of its text
+        // fields has the focus) goes no further. Keys reach it only then: egui would otherwise
+        // take Tab for its own focus, and arrows for a slider clicked before, which the
+        // walkthrough's keys would move as well.
+        let typing = self.session.panel.context().text_edit_focused();
+        let to_panel = match (&mut self.egui, &self.window, &event) {
+            (_, _, WindowEvent::KeyboardInput { .. }) if !typing => false,
+            (Some(egui), Some(window), _) => egui.on_window_event(window, &event).consumed,
             _ => false,
         };
         match event {
