@@ -432,6 +432,12 @@ fn full_range(aspect: vk::ImageAspectFlags) -> vk::ImageSubresourceRange {
 }
 
 fn copy_region(image: &Image) -> vk::BufferImageCopy {
+    copy_rect(image, vk::Rect2D { offset: vk::Offset2D::default(), extent: image.extent })
+}
+
+/// A copy between `rect` of `image` and a buffer that holds its texels tightly packed from
+/// offset 0.
+pub(crate) fn copy_rect(image: &Image, rect: vk::Rect2D) -> vk::BufferImageCopy {
     vk::BufferImageCopy::default()
         .image_subresource(vk::ImageSubresourceLayers {
             aspect_mask: aspect_of(image.format),
@@ -439,5 +445,6 @@ fn copy_region(image: &Image) -> vk::BufferImageCopy {
             base_array_layer: 0,
             layer_count: 1,
         })
-        .image_extent(vk::Extent3D { width: image.extent.width, height: image.extent.height, depth: 1 })
+        .image_offset(vk::Offset3D { x: rect.offset.x, y: rect.offset.y, z: 0 })
+        .image_extent(vk::Extent3D { width: rect.extent.width, height: rect.extent.height, depth: 1 })
 }

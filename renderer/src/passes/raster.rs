@@ -73,6 +73,29 @@ pub(crate) fn set_viewport(ctx: &Context, cmd: vk::CommandBuffer, view: vk::Rect
     }
 }
 
+/// Runs `create` with the vertex and fragment stages of the SPIR-V `vertex` and `fragment`
+/// (entry points `main`), whose modules live only for the call.
+pub(crate) fn with_stages<R>(
+    ctx: &Context,
+    vertex: &[u32],
+    fragment: &[u32],
+    create: impl FnOnce([vk::PipelineShaderStageCreateInfo; 2]) -> Result<R>,
+) -> Result<R> {
+    ctx.step("vkCreateGraphicsPipelines")?;
+    let vs = ctx.create_shader_module(vertex)?;
+    let created = ctx.create_shader_module(fragment).and_then(|fs| {
+        let stages = [
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
+            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
+        ];
+        let made = create(stages);
+        ctx.destroy_shader_module(fs);
+        made
+    });
+    ctx.destroy_shader_module(vs);
+    created
+}
+
 /// A graphics pipeline that rasterises the scene mesh ([`GBufferVertex`]) with depth testing,
 /// for the G-buffer and shadow passes.
 pub(crate) struct Raster<'a> {
@@ -93,29 +116,17 @@ impl Raster<'_> {
         layout: vk::PipelineLayout,
         values: &[u32],
     ) -> Result<Vec<vk::Pipeline>> {
-        ctx.step("vkCreateGraphicsPipelines")?;
-        let vs = ctx.create_shader_module(self.vertex)?;
-        let created = ctx.create_shader_module(self.fragment).and_then(|fs| {
-            let pipelines = self.create(ctx, layout, values, [vs, fs]);
-            ctx.destroy_shader_module(fs);
-            pipelines
-        });
-        ctx.destroy_shader_module(vs);
-        created
+        with_stages(ctx, self.vertex, self.fragment, |stages| self.create(ctx, layout, values, stages))
     }
 
-    /// The pipelines of [`Raster::pipelines`] from the vertex and fragment `modules`.
+    /// The pipelines of [`Raster::pipelines`] from the vertex and fragment `stages`.
     fn create(
         &self,
         ctx: &Context,
         layout: vk::PipelineLayout,
         values: &[u32],
-        [vs, fs]: [vk::ShaderModule; 2],
+        stages: [vk::PipelineShaderStageCreateInfo; 2],
     ) -> Result<Vec<vk::Pipeline>> {
-        let stages = [
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
-            vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
-        ];
         let bindings = [vk::VertexInputBindingDescription::default()
             .binding(0)
             .stride(std::mem::size_of::<GBufferVertex>() as u32)

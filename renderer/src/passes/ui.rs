@@ -16,9 +16,10 @@ use crate::backend::context::Context;
 use crate::backend::descriptors::{create_set_layout, Bind, BoundSet};
 use crate::backend::frames::FRAMES_IN_FLIGHT;
 use crate::backend::guard::Destroy;
-use crate::backend::resources::{Buffer, Image};
+use crate::backend::resources::{copy_rect, Buffer, Image};
 use crate::backend::sync::{Access, Pass, Resource, Use};
 use crate::error::{Result, VkContext};
+use crate::passes::raster::with_stages;
 
 /// A vertex: position in points from the top-left corner, texture coordinates, and an
 /// sRGB-encoded premultiplied colour (egui's `Vertex` has this layout).
@@ -424,15 +425,7 @@ fn clip_to(clip: vk::Rect2D, extent: vk::Extent2D) -> Option<vk::Rect2D> {
 
 /// Records the copy of `staging`'s texels into `rect` of `image` (in `TRANSFER_DST_OPTIMAL`).
 fn copy_texels(ctx: &Context, cmd: vk::CommandBuffer, staging: &Buffer, image: &Image, rect: vk::Rect2D) {
-    let region = vk::BufferImageCopy::default()
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: 0,
-            base_array_layer: 0,
-            layer_count: 1,
-        })
-        .image_offset(vk::Offset3D { x: rect.offset.x, y: rect.offset.y, z: 0 })
-        .image_extent(vk::Extent3D { width: rect.extent.width, height: rect.extent.height, depth: 1 });
+    let region = copy_rect(image, rect);
     // SAFETY: recording outside a render pass; the buffer holds the rectangle's texels,
     // tightly packed, and the rectangle lies in the image (checked by `prepare`).
     unsafe {
@@ -454,19 +447,15 @@ fn create_pipeline(
     vertex: &[u32],
     fragment: &[u32],
 ) -> Result<vk::Pipeline> {
-    ctx.step("vkCreateGraphicsPipelines")?;
-    let vs = ctx.create_shader_module(vertex)?;
-    let fs = match ctx.create_shader_module(fragment) {
-        Ok(fs) => fs,
-        Err(e) => {
-            ctx.destroy_shader_module(vs);
-            return Err(e);
-        }
-    };
-    let stages = [
-        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::VERTEX).module(vs).name(c"main"),
-        vk::PipelineShaderStageCreateInfo::default().stage(vk::ShaderStageFlags::FRAGMENT).module(fs).name(c"main"),
-    ];
+    with_stages(ctx, vertex, fragment, |stages| create_pipeline_from(ctx, layout, stages))
+}
+
+/// The pipeline of [`create_pipeline`] from the vertex and fragment `stages`.
+fn create_pipeline_from(
+    ctx: &Context,
+    layout: vk::PipelineLayout,
+    stages: [vk::PipelineShaderStageCreateInfo; 2],
+) -> Result<vk::Pipeline> {
     let bindings = [vk::VertexInputBindingDescription::default()
         .binding(0)
         .stride(std::mem::size_of::<UiVertex>() as u32)
@@ -515,7 +504,5 @@ fn create_pipeline(
     // SAFETY: the create info and everything it points to outlive the call; the modules and
     // the layout belong to this device.
     let created = unsafe { ctx.device.create_graphics_pipelines(vk::PipelineCache::null(), &info, None) };
-    ctx.destroy_shader_module(fs);
-    ctx.destroy_shader_module(vs);
     created.map(|p| p[0]).map_err(|(_, e)| e).vk("vkCreateGraphicsPipelines")
 }
