@@ -110,6 +110,11 @@ impl ViewerGpu {
         self.metered.take()
     }
 
+    /// Whether the scene has mirrors, whose reflections frames draw.
+    pub fn has_mirrors(&self) -> bool {
+        self.frame.as_ref().expect("live until finish").has_mirrors()
+    }
+
     /// Whether frames write timestamps, for GPU time per pass.
     pub fn timed(&self) -> bool {
         self.period_ns.is_some()

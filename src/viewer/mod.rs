@@ -19,7 +19,7 @@ use anyhow::{Context as _, Result};
 use crate::frame_stats::Stats;
 use crate::gpu_scene::gbuffer_constants;
 use gpu::ViewerGpu;
-use panel::Panel;
+use panel::{FrameFacts, Panel};
 use rrf_renderer::backend::present::Presenter;
 use rrf_renderer::passes::network::Variant;
 use script::{Action, Script, FRAME_SECONDS};
@@ -151,8 +151,12 @@ impl Session {
         let input = input.unwrap_or_else(|| headless_input(extent, t, gpu.max_texture_side()));
         let ppp = extent.width as f32 / input.screen_rect.map_or(extent.width as f32, |r| r.width()).max(1.0);
         let aspect = extent.width as f32 / extent.height as f32;
-        let view_projection = gbuffer_constants(&self.state.view(), aspect, None).view_projection;
-        let (ui, platform) = self.panel.run(input, &mut self.state, &self.stats, &view_projection, gpu.timed());
+        let facts = FrameFacts {
+            view_projection: gbuffer_constants(&self.state.view(), aspect, None).view_projection,
+            timed: gpu.timed(),
+            mirrors: gpu.has_mirrors(),
+        };
+        let (ui, platform) = self.panel.run(input, &mut self.state, &self.stats, &facts);
         requests.platform = Some(platform);
         if let (true, Some(stops)) = (self.state.auto_exposure, gpu.take_metered()) {
             self.state.exposure_step(stops);

@@ -32,6 +32,16 @@ const PASS_COLOURS: [Color32; TIMED_PASSES.len()] = [
 const LIGHT_BOX_COLOUR: Color32 = Color32::from_rgb(255, 210, 60);
 const CAMERA_BOX_COLOUR: Color32 = Color32::from_rgb(80, 200, 255);
 
+/// What the panel needs to know of the frame.
+pub struct FrameFacts {
+    /// Column-major, to Vulkan clip space: for the box outlines.
+    pub view_projection: [[f32; 4]; 4],
+    /// Whether the device writes timestamps, for GPU time per pass.
+    pub timed: bool,
+    /// Whether the scene has mirrors, whose pass the graph then lists.
+    pub mirrors: bool,
+}
+
 /// The panel's own settings and egui's state.
 pub struct Panel {
     ctx: egui::Context,
@@ -64,24 +74,22 @@ impl Panel {
     }
 
     /// Lays out one frame of the panel from `input`, applying what the user changed to
-    /// `state`. `view_projection` is the frame's (column-major, to Vulkan clip space), for the
-    /// box outlines; `timed`, whether the device writes timestamps. Returns what to draw and egui's requests to the window (cursor shape).
+    /// `state`. Returns what to draw and egui's requests to the window (cursor shape).
     pub fn run(
         &mut self,
         input: egui::RawInput,
         state: &mut ViewerState,
         stats: &Stats,
-        view_projection: &[[f32; 4]; 4],
-        timed: bool,
+        frame: &FrameFacts,
     ) -> (UiFrame, egui::PlatformOutput) {
         let mut left_edge = f32::INFINITY;
         let output = self.ctx.run_ui(input, |ui| {
             if self.boxes {
-                outline_boxes(ui.ctx(), state, view_projection);
+                outline_boxes(ui.ctx(), state, &frame.view_projection);
             }
             if self.shown {
                 let panel = egui::Panel::right("settings").resizable(false).exact_size(WIDTH).show(ui, |ui| {
-                    egui::ScrollArea::vertical().show(ui, |ui| settings(ui, state, stats, timed, &mut self.boxes));
+                    egui::ScrollArea::vertical().show(ui, |ui| settings(ui, state, stats, frame, &mut self.boxes));
                 });
                 left_edge = panel.response.rect.left();
             }
@@ -98,7 +106,7 @@ impl Panel {
 }
 
 /// The panel's sections.
-fn settings(ui: &mut egui::Ui, state: &mut ViewerState, stats: &Stats, timed: bool, boxes: &mut bool) {
+fn settings(ui: &mut egui::Ui, state: &mut ViewerState, stats: &Stats, frame: &FrameFacts, boxes: &mut bool) {
     let (fps, frame_ms) = stats.recent_rate();
     ui.heading(format!("rrf: {}", state.scene_name));
     ui.label(format!("{fps:.1} fps, {frame_ms:.1} ms per frame"));
@@ -114,10 +122,10 @@ fn settings(ui: &mut egui::Ui, state: &mut ViewerState, stats: &Stats, timed: bo
             egui::Slider::new(&mut state.exposure, -MAX_EXPOSURE..=MAX_EXPOSURE).step_by(0.1).text("exposure, EV"),
         );
         ui.checkbox(&mut state.auto_exposure, "automatic exposure")
-            .on_hover_text("Keeps the frame's mean brightness at mid-grey, as a camera does.");
+            .on_hover_text("Keeps the frame's median pixel at mid-grey, as a camera's meter does.");
     });
-    egui::CollapsingHeader::new("GPU time per pass").default_open(true).show(ui, |ui| match timed {
-        true => gpu_graph(ui, stats),
+    egui::CollapsingHeader::new("GPU time per pass").default_open(true).show(ui, |ui| match frame.timed {
+        true => gpu_graph(ui, stats, frame.mirrors),
         false => drop(ui.label("This device writes no timestamps.")),
     });
     egui::CollapsingHeader::new("Direct light").default_open(true).show(ui, |ui| {
@@ -209,8 +217,9 @@ fn swatch(ui: &mut egui::Ui, colour: Color32) {
     ui.painter().rect_filled(rect, 0.0, colour);
 }
 
-/// The GPU milliseconds of each timed pass over the last frames, stacked, newest on the right.
-fn gpu_graph(ui: &mut egui::Ui, stats: &Stats) {
+/// The GPU milliseconds of each timed pass over the last frames, stacked, newest on the right;
+/// the mirrors' pass only in a scene with `mirrors`.
+fn gpu_graph(ui: &mut egui::Ui, stats: &Stats, mirrors: bool) {
     let frames = stats.gpu_ms[0].len();
     if frames == 0 {
         ui.label("Timings arrive when the first frames have finished.");
@@ -241,7 +250,7 @@ fn gpu_graph(ui: &mut egui::Ui, stats: &Stats) {
         Color32::WHITE,
     );
     let recent = stats.recent_gpu_ms();
-    for (k, name) in TIMED_PASSES.iter().enumerate() {
+    for (k, name) in TIMED_PASSES.iter().enumerate().filter(|(_, name)| mirrors || **name != "mirrors") {
         ui.horizontal(|ui| {
             swatch(ui, PASS_COLOURS[k]);
             ui.label(format!("{name}: {:.2} ms", recent[k]));
