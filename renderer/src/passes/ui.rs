@@ -233,14 +233,7 @@ impl UiPass {
                     [0, 0]
                 }
             };
-            let mut staging = ctx.create_buffer(
-                "ui texels",
-                texels.rgba.len() as u64,
-                vk::BufferUsageFlags::TRANSFER_SRC,
-                MemoryLocation::CpuToGpu,
-            )?;
-            staging.mapped_mut().expect("CpuToGpu buffers are mapped")[..texels.rgba.len()]
-                .copy_from_slice(&texels.rgba);
+            let staging = ctx.create_buffer_with_data("ui texels", &texels.rgba, vk::BufferUsageFlags::TRANSFER_SRC)?;
             let rect = vk::Rect2D {
                 offset: vk::Offset2D { x: offset[0] as i32, y: offset[1] as i32 },
                 extent: vk::Extent2D { width, height },
