@@ -13,7 +13,7 @@ use rrf_renderer::frame::{Frame, FrameConstants, FrameOutput, FramePixels, Frame
 use rrf_renderer::passes::gbuffer::{box_in_view, box_on_screen};
 use rrf_renderer::passes::mirror::Reflected;
 use rrf_renderer::passes::network::{LeafBlend, NetworkShaders, NetworkUnit, NetworkWeights, Variant, MAX_MIRRORS};
-use rrf_renderer::{vk, Context};
+use rrf_renderer::{vk, Context, Destroy};
 
 use crate::direct_mode::DirectMode;
 use crate::gpu_scene::{
@@ -149,6 +149,12 @@ impl SceneFrame {
 
     pub fn destroy(self, ctx: &Context) {
         self.gpu.destroy(ctx);
+    }
+}
+
+impl Destroy for SceneFrame {
+    fn destroy(self, ctx: &Context) {
+        SceneFrame::destroy(self, ctx);
     }
 }
 

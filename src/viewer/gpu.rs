@@ -49,22 +49,11 @@ impl ViewerGpu {
         (variant, direct): (Variant, DirectMode),
         extent: vk::Extent2D,
     ) -> Result<Self> {
-        let frame = SceneFrame::new(&ctx, &scene, &model, variant, extent, FrameOutput::Display, direct)?;
-        let ui = UiPass::new(&ctx, shaders::UI_VERT, shaders::UI_FRAG);
-        let ring = ui.and_then(|ui| match FrameLoop::new(&ctx, TIMESTAMPS) {
-            Ok(ring) => Ok((ui, ring)),
-            Err(e) => {
-                ui.destroy(&ctx);
-                Err(e)
-            }
-        });
-        let (ui, ring) = match ring {
-            Ok(made) => made,
-            Err(e) => {
-                frame.destroy(&ctx);
-                return Err(e.into());
-            }
-        };
+        // Each part is destroyed again if a later one cannot be made.
+        let frame = ctx.guard(SceneFrame::new(&ctx, &scene, &model, variant, extent, FrameOutput::Display, direct)?);
+        let ui = ctx.guard(UiPass::new(&ctx, shaders::UI_VERT, shaders::UI_FRAG)?);
+        let ring = FrameLoop::new(&ctx, TIMESTAMPS)?;
+        let (frame, ui) = (frame.keep(), ui.keep());
         let period_ns = ctx.info.limits.timestamp_period_ns.map(f64::from);
         Ok(ViewerGpu {
             ctx,
