@@ -138,17 +138,6 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let direct = args.input.direct.resolve(&scene, Some(args.variant.0));
     direct.check(&scene, &model)?;
     let mut state = ViewerState::new(&scene, view, lights);
-    state.direct_choices = [DirectMode::Learned, DirectMode::Analytic]
-        .into_iter()
-        .map(|mode| {
-            (
-                mode,
-                mode.check(&scene, &model)
-                    .and_then(|()| mode.check_variant(args.variant.0))
-                    .map_err(|e| format!("{e:#}")),
-            )
-        })
-        .collect();
     state.overlay = !args.no_overlay;
     state.direct = direct;
     if let Some(dir) = &args.record {
@@ -196,6 +185,10 @@ pub fn run(args: &ViewArgs) -> Result<()> {
     let title = format!("rrf view: {}", scene.name);
     let mut gpu = ViewerGpu::new(ctx, scene, model, (args.variant.0, direct), extent)?;
     startup.phase("frame set-up");
+    state.direct_choices = [DirectMode::Learned, DirectMode::Analytic]
+        .into_iter()
+        .map(|mode| (mode, gpu.direct_allowed(mode).map_err(|e| format!("{e:#}"))))
+        .collect();
     let panel_shown = args.panel || (event_loop.is_some() && !plan.scripted() && !args.no_panel);
     // The panel names the keys; the overlay's list of them starts hidden beside it.
     state.help = !panel_shown;

@@ -78,11 +78,17 @@ impl ViewerGpu {
         self.direct
     }
 
+    /// Whether the frame can be made with direct light from `direct`: whether the scene, the
+    /// model and the network pass allow it.
+    pub fn direct_allowed(&self, direct: DirectMode) -> Result<()> {
+        direct.check(&self.scene, &self.model)?;
+        direct.check_variant(self.variant())
+    }
+
     /// Makes the frame again with direct light from `direct`, after the frames in flight have
     /// finished. On failure the frame stays as it was.
     pub fn set_direct(&mut self, direct: DirectMode) -> Result<()> {
-        direct.check(&self.scene, &self.model)?;
-        direct.check_variant(self.variant())?;
+        self.direct_allowed(direct)?;
         let (variant, extent) = (self.variant(), self.extent());
         let ctx = &self.ctx;
         self.ring.as_mut().expect("live until finish").wait_all(ctx)?;
