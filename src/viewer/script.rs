@@ -13,13 +13,15 @@
 //! | `remove-light` | removes the selected light (not the last) |
 //! | `light-color R,G,B [intensity K]` | the selected light's colour (0 to 1) and intensity |
 //! | `component gi\|direct\|indirect` | which light is shown |
-//! | `exposure EV` | exposure in stops |
+//! | `direct learned\|analytic` | where direct light comes from (the frame is made again) |
+//! | `exposure EV\|auto` | exposure in stops, or automatic |
 //! | `resize WxH` | the frame (and window) size in pixels |
 //! | `screenshot FILE.png` | saves the frame as shown, overlay included (unless `--no-overlay`) |
 //! | `overlay on\|off` | shows or hides the overlay |
+//! | `panel on\|off` | shows or hides the settings panel |
+//! | `boxes on\|off` | outlines the light's and the camera's trained boxes, or not |
 //! | `quit` | ends the run (otherwise it ends one frame after the last event) |
 
-use crate::direct_mode::DirectMode;
 use std::path::{Path, PathBuf};
 
 use anyhow::{anyhow, bail, Context, Result};
@@ -27,6 +29,7 @@ use rrf_baker::glam::Vec3;
 use rrf_baker::scene::PlacedLight;
 use rrf_renderer::frame::Shown;
 
+use crate::direct_mode::DirectMode;
 use crate::lights::parse_light;
 use crate::parse::{parse_exposure, parse_size, parse_vec3};
 
@@ -209,8 +212,7 @@ fn parse_line(line: &str) -> Result<Event> {
             }
             Action::Screenshot(PathBuf::from(file))
         }
-        ("overlay", ["on"]) => Action::Overlay(true),
-        ("overlay", ["off"]) => Action::Overlay(false),
+        ("overlay", [on]) => Action::Overlay(on_off(on)?),
         ("panel", [on]) => Action::Panel(on_off(on)?),
         ("boxes", [on]) => Action::Boxes(on_off(on)?),
         ("quit", []) => Action::Quit,
@@ -264,6 +266,8 @@ mod tests {
             ("0 resize 0x10", "WxH"),
             ("0 screenshot a.jpg", ".png"),
             ("0 quit now", "wrong arguments"),
+            ("0 overlay maybe", "on or off"),
+            ("0 boxes 1", "on or off"),
         ] {
             let e = format!("{:#}", Script::parse(&format!("# c\n{text}")).unwrap_err());
             assert!(e.contains("line 2") && e.contains(needle), "{text:?} gave {e:?}");
