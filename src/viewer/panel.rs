@@ -148,7 +148,7 @@ fn settings(ui: &mut egui::Ui, state: &mut ViewerState, stats: &Stats, frame: &F
             swatch(ui, CAMERA_BOX_COLOUR);
             ui.label("the camera's");
         });
-        if state.camera_box().is_some_and(|b| !b.contains(state.eye)) {
+        if state.camera_outside_box() {
             ui.colored_label(Color32::YELLOW, "The camera is outside its box: expect errors.");
         }
     });

@@ -74,7 +74,7 @@ pub struct ViewerState {
     pub light_at_edge: bool,
     pub shown: Shown,
     pub exposure: f32,
-    /// Whether the exposure follows the frame's brightness ([`ViewerState::meter`]).
+    /// Whether the exposure follows the frame's brightness (`super::exposure`).
     pub auto_exposure: bool,
     pub overlay: bool,
     pub help: bool,
@@ -175,6 +175,11 @@ impl ViewerState {
     /// The box the camera was trained in, where the scene gives one.
     pub fn camera_box(&self) -> Option<Aabb> {
         self.camera_box
+    }
+
+    /// Whether the camera is outside the box it was trained in.
+    pub fn camera_outside_box(&self) -> bool {
+        self.camera_box.as_ref().is_some_and(|b| !b.contains(self.eye))
     }
 
     /// Why lights cannot be added, recoloured or dimmed in this scene, if they cannot.
@@ -405,7 +410,7 @@ impl ViewerState {
             lines.push((note.clone(), Colour::Yellow));
         }
         let e = self.eye;
-        let outside = self.camera_box.as_ref().is_some_and(|b| !b.contains(e));
+        let outside = self.camera_outside_box();
         let note = if outside { "  outside its trained box" } else { "" };
         lines.push((
             format!("camera {:.2},{:.2},{:.2}{note}", e.x, e.y, e.z),
