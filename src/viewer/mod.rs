@@ -147,6 +147,8 @@ impl Session {
                 }
             }
         }
+        self.state.update(&self.held, dt as f32, t);
+        // The panel after the frame's moves, so that its outlines are of the view it draws.
         let extent = gpu.extent();
         let input = input.unwrap_or_else(|| headless_input(extent, t, gpu.max_texture_side()));
         let ppp = extent.width as f32 / input.screen_rect.map_or(extent.width as f32, |r| r.width()).max(1.0);
@@ -161,7 +163,6 @@ impl Session {
         if let (true, Some(stops)) = (self.state.auto_exposure, gpu.take_metered()) {
             self.state.exposure_step(stops);
         }
-        let columns = (self.panel.left_edge() * ppp).round().clamp(1.0, extent.width as f32) as u32;
         if self.state.direct != gpu.direct() {
             // Remakes the frame: its network pipelines are made again as they come into view.
             if let Err(e) = gpu.set_direct(self.state.direct) {
@@ -169,8 +170,9 @@ impl Session {
                 self.state.direct = gpu.direct();
             }
         }
-        let meter = (self.state.auto_exposure && self.frame.is_multiple_of(METER_FRAMES)).then_some(columns);
-        self.state.update(&self.held, dt as f32, t);
+        // The meter reads the columns left of the panel.
+        let meter = (self.state.auto_exposure && self.frame.is_multiple_of(METER_FRAMES))
+            .then(|| (self.panel.left_edge() * ppp).round().clamp(1.0, extent.width as f32) as u32);
         let last = self.plan.last_frame().is_some_and(|n| self.frame + 1 >= n);
         if let (true, Some(path)) = (last, &self.plan.screenshot) {
             screenshots.push(path.clone());
