@@ -17,17 +17,23 @@ fn load(path: &Path) -> image::RgbImage {
     image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8()
 }
 
-/// Runs `rrf ARGS` in a window on a fresh Xvfb display (`xvfb-run`, which `cargo xtask
-/// setup` installs).
+/// Runs `rrf ARGS` in a window on a fresh Xvfb display.
 fn rrf_in_xvfb(args: &[&str]) -> std::process::Output {
+    in_xvfb(&[&[env!("CARGO_BIN_EXE_rrf")], args].concat())
+}
+
+/// Runs the command `command` (a program and its arguments) on a fresh Xvfb display
+/// (`xvfb-run`, which `cargo xtask setup` installs, with xdotool), with rrf on lavapipe and
+/// validation required.
+fn in_xvfb(command: &[&str]) -> std::process::Output {
     let xvfb = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1280x1024x24", env!("CARGO_BIN_EXE_rrf")])
-        .args(args)
+        .args(["-a", "-s", "-screen 0 1280x1024x24"])
+        .args(command)
         .env("RRF_DEVICE", "llvmpipe")
         .env("RRF_VALIDATION", "required")
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output();
-    xvfb.unwrap_or_else(|e| panic!("cannot run xvfb-run ({e}); install Xvfb with `cargo xtask setup`"))
+    xvfb.unwrap_or_else(|e| panic!("cannot run xvfb-run ({e}); install Xvfb and xdotool with `cargo xtask setup`"))
 }
 
 /// Asserts that the viewer's screenshot `shot` shows the frame that `rrf render` makes of the
@@ -391,15 +397,9 @@ fn panel_run(script: &str, actions: &str) -> String {
         path.display(),
         log.display(),
     );
-    let xvfb = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 1024x768x24", "bash", "-c", &run])
-        .env("RRF_DEVICE", "llvmpipe")
-        .env("RRF_VALIDATION", "required")
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .status()
-        .unwrap_or_else(|e| panic!("cannot run xvfb-run ({e}); install Xvfb and xdotool with `cargo xtask setup`"));
+    let xvfb = in_xvfb(&["bash", "-c", &run]);
     let stderr = std::fs::read_to_string(&log).unwrap_or_default();
-    assert!(xvfb.success(), "rrf view failed:\n{stderr}");
+    assert!(xvfb.status.success(), "rrf view failed:\n{stderr}");
     for f in [path, log] {
         let _ = std::fs::remove_file(f);
     }
