@@ -8,6 +8,7 @@ use crate::network::{raw_inputs, reflectance, Component, INPUTS};
 use crate::scene::{Aabb, Scene};
 use crate::trace::integrator::radiance_leaving;
 use crate::trace::sampling::{mix64, uniform_sphere, Rng};
+use crate::trace::stratified::stratified_vertex_samples;
 use crate::trace::{Geometry, Radiance, TraceSettings, World};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,6 +62,16 @@ pub fn latin_hypercube(n: usize, light: &Aabb, camera: &Aabb, seed: u64) -> Vec<
         })
         .collect()
 }
+
+/// Independent groups of paths per sample, each with its own stratified first vertex: the
+/// spread of their means estimates the noise of the sample's targets ([`Sample::noise`]).
+/// Few groups stratify best (each is a set of `paths / NOISE_GROUPS` points), and three
+/// degrees of freedom per sample are enough where the noise is used: averaged over a
+/// network's validation samples.
+const NOISE_GROUPS: u32 = 4;
+
+/// Separates the random streams of the stratified first vertices from the paths' own.
+const STRATA_STREAM: u64 = 0x5742_a7a0_0000_0001;
 
 /// Where a configuration's rays go.
 #[derive(Clone, Copy)]
@@ -168,30 +179,44 @@ fn sample_along(
     {
         return None;
     }
-    let mut sum = Radiance::default();
-    let mut squares = [Vec3::ZERO; 2];
-    for path in 0..paths {
-        let mut path_rng = Rng::new(seed ^ mix64(u64::from(ray) + 1), u64::from(path));
-        let l = radiance_leaving(world, &si, -dir, trace, &mut path_rng);
-        squares[0] += l.direct * l.direct;
-        squares[1] += l.indirect * l.indirect;
-        sum += l;
+    // Path `p` is point `p / groups` of group `p % groups`'s stratified set.
+    let stream = seed ^ mix64(u64::from(ray) + 1);
+    let groups = paths.clamp(1, NOISE_GROUPS) as usize;
+    let mut strata_rng = Rng::new(stream, STRATA_STREAM);
+    let strata: Vec<_> = (0..groups)
+        .map(|g| stratified_vertex_samples((paths as usize + groups - 1 - g) / groups, &mut strata_rng))
+        .collect();
+    let mut sums = vec![Radiance::default(); groups];
+    for path in 0..paths as usize {
+        let mut path_rng = Rng::new(stream, path as u64);
+        let first = &strata[path % groups][path / groups];
+        sums[path % groups] += radiance_leaving(world, &si, -dir, Some(first), trace, &mut path_rng);
     }
-    let n = paths.max(1) as f32;
-    let mean = sum.scaled(1.0 / n);
+    let mut total = Radiance::default();
+    sums.iter().for_each(|&group| total += group);
+    let mean = total.scaled(1.0 / paths.max(1) as f32);
     // The networks learn radiance over the surface's reflectance (`network::reflectance`).
     let r = reflectance(si.bsdf.base_color, si.bsdf.metallic, si.bsdf.specular);
-    // The variance of the mean of n paths: the paths' sample variance over n.
-    let noise = |squares: Vec3, mean: Vec3| {
-        let variance = (squares / n - mean * mean).max(Vec3::ZERO) * (n / (n - 1.0).max(1.0));
-        (variance / (n * r * r)).element_sum() / 3.0
+    // The variance of the mean: the spread of the groups' means, which are independent
+    // estimates (the paths within a group are not independent of each other), over their
+    // number. It assumes groups of equal size; they differ by one path at most.
+    let noise = |component: fn(&Radiance) -> Vec3| {
+        let g = groups as f32;
+        let spread: Vec3 = (0..groups)
+            .map(|k| {
+                let d = component(&sums[k]) / strata[k].len().max(1) as f32 - component(&mean);
+                d * d
+            })
+            .sum();
+        let variance = spread / (g * (g - 1.0)).max(1.0);
+        (variance / (r * r)).element_sum() / 3.0
     };
     Some(Sample {
         object: si.object,
         inputs: raw_inputs(si.position, -dir, config.light, si.shading_normal, si.roughness),
         direct: (mean.direct / r).to_array(),
         indirect: (mean.indirect / r).to_array(),
-        noise: [noise(squares[0], mean.direct), noise(squares[1], mean.indirect)],
+        noise: [noise(|l| l.direct), noise(|l| l.indirect)],
     })
 }
 
@@ -233,4 +258,144 @@ pub fn decode(bytes: &[u8], objects: usize) -> Option<Vec<Sample>> {
             .collect::<Vec<_>>(),
     )
     .filter(|samples| samples.iter().all(|s| (s.object as usize) < objects))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use super::*;
+
+    /// Paths per sample in these tests: [`NOISE_GROUPS`] groups of 32 stratified points.
+    const PATHS: u32 = 128;
+    /// Independent bakes of each point's sample.
+    const SEEDS: u64 = 24;
+
+    /// What repeated bakes of one point's sample give, per component, in the units of its
+    /// targets.
+    struct Repeated {
+        /// The mean over the channels of the targets: its mean over the bakes, and its
+        /// variance across them.
+        mean: f64,
+        variance: f64,
+        /// The targets' variance across the bakes, channel by channel, averaged over the
+        /// channels: what [`Sample::noise`] estimates.
+        channel_variance: f64,
+        /// The mean of the noise the bakes declared.
+        declared: f64,
+        /// Paths traced independently of each other, as many as all the bakes traced: the
+        /// mean over the channels of their mean, its variance between paths, and the paths'
+        /// variance channel by channel, averaged over the channels.
+        independent_mean: f64,
+        path_variance: f64,
+        path_channel_variance: f64,
+    }
+
+    /// Points on the Cornell box's floor, walls and blocks, seen from one configuration; for
+    /// each, [`SEEDS`] samples of [`PATHS`] paths, and as many paths traced independently.
+    fn repeated_samples() -> Vec<[Repeated; 2]> {
+        let scene = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell-box")).unwrap();
+        let geometry = Geometry::new(&scene);
+        let config = Configuration { light: Vec3::new(0.3, 0.5, 0.3), viewpoint: Vec3::new(0.28, 0.3, -0.5) };
+        let world = World::new(&scene, &geometry, Some(config.light));
+        let trace = TraceSettings { max_depth: 8, rr_depth: Some(5) };
+        let mut out = Vec::new();
+        for ray in 0..48u32 {
+            let at = Vec3::new(0.05 + 0.45 * (ray % 8) as f32 / 7.0, 0.02 + 0.5 * (ray / 8) as f32 / 5.0, 0.55);
+            let dir = (at - config.viewpoint).normalize();
+            let samples: Vec<Sample> = (0..SEEDS)
+                .filter_map(|seed| sample_along(&world, &config, dir, None, PATHS, &trace, seed, ray))
+                .collect();
+            if samples.len() < SEEDS as usize {
+                continue; // the light, or nothing
+            }
+            let si = world.interaction(config.viewpoint, dir, world.intersect(config.viewpoint, dir).unwrap());
+            let r = reflectance(si.bsdf.base_color, si.bsdf.metallic, si.bsdf.specular);
+            let independent: Vec<Radiance> = (0..SEEDS * u64::from(PATHS))
+                .map(|p| radiance_leaving(&world, &si, -dir, None, &trace, &mut Rng::new(0x1d ^ u64::from(ray), p)))
+                .collect();
+            out.push(Component::ALL.map(|c| {
+                let n = SEEDS as f64;
+                let channel = |s: &Sample, k: usize| f64::from(s.target(c)[k]);
+                let channel_mean = |k: usize| samples.iter().map(|s| channel(s, k)).sum::<f64>() / n;
+                let variance_of = |value: &dyn Fn(&Sample) -> f64, mean: f64| {
+                    samples.iter().map(|s| (value(s) - mean).powi(2)).sum::<f64>() / (n - 1.0)
+                };
+                let mean = (0..3).map(channel_mean).sum::<f64>() / 3.0;
+                let target = |l: &Radiance| match c {
+                    Component::Direct => l.direct / r,
+                    Component::Indirect => l.indirect / r,
+                };
+                let m = independent.len() as f64;
+                let path_channel = |l: &Radiance, k: usize| f64::from(target(l)[k]);
+                let path_channel_mean = |k: usize| independent.iter().map(|l| path_channel(l, k)).sum::<f64>() / m;
+                let path_variance_of = |value: &dyn Fn(&Radiance) -> f64, mean: f64| {
+                    independent.iter().map(|l| (value(l) - mean).powi(2)).sum::<f64>() / (m - 1.0)
+                };
+                let value = |l: &Radiance| f64::from(target(l).element_sum()) / 3.0;
+                let independent_mean = independent.iter().map(value).sum::<f64>() / m;
+                Repeated {
+                    mean,
+                    variance: variance_of(&|s| (0..3).map(|k| channel(s, k)).sum::<f64>() / 3.0, mean),
+                    channel_variance: (0..3).map(|k| variance_of(&|s| channel(s, k), channel_mean(k))).sum::<f64>()
+                        / 3.0,
+                    declared: samples.iter().map(|s| f64::from(s.noise(c))).sum::<f64>() / n,
+                    independent_mean,
+                    path_variance: path_variance_of(&value, independent_mean),
+                    path_channel_variance: (0..3)
+                        .map(|k| path_variance_of(&|l| path_channel(l, k), path_channel_mean(k)))
+                        .sum::<f64>()
+                        / 3.0,
+                }
+            }));
+        }
+        assert!(out.len() > 30, "{} points", out.len());
+        out
+    }
+
+    /// The noise a sample declares is the variance its targets have from bake to bake,
+    /// although its paths are not independent of each other: the spread of its independent
+    /// groups' means measures it, where the paths' own spread would count the variance that
+    /// stratification removed.
+    #[test]
+    fn declared_noise_is_the_variance_between_bakes() {
+        let points = repeated_samples();
+        for (c, component) in Component::ALL.iter().enumerate() {
+            let variance: f64 = points.iter().map(|p| p[c].channel_variance).sum();
+            let declared: f64 = points.iter().map(|p| p[c].declared).sum();
+            let ratio = declared / variance;
+            assert!((0.8..1.25).contains(&ratio), "{component:?}: declared {declared:.3e}, found {variance:.3e}");
+        }
+    }
+
+    /// Stratified first vertices leave the targets' expectation as it was: each point's mean
+    /// over the bakes agrees with independent paths' mean within their noise (chi-square over
+    /// the points and components, at the 0.1% level).
+    #[test]
+    fn stratified_targets_keep_their_expectation() {
+        let points = repeated_samples();
+        let (mut chi2, mut dof) = (0.0, 0);
+        for p in points.iter().flatten() {
+            let variance = (p.variance + p.path_variance / f64::from(PATHS)) / SEEDS as f64;
+            if variance > 0.0 {
+                chi2 += (p.mean - p.independent_mean).powi(2) / variance;
+                dof += 1;
+            }
+        }
+        // The 99.9% quantile of chi-square (Wilson–Hilferty).
+        let k = f64::from(dof);
+        let limit = k * (1.0 - 2.0 / (9.0 * k) + 3.09 * (2.0 / (9.0 * k)).sqrt()).powi(3);
+        assert!(chi2 < limit, "chi-square {chi2:.1} over {dof} degrees of freedom, limit {limit:.1}");
+    }
+
+    /// And they vary less from bake to bake than the mean of as many independent paths does.
+    #[test]
+    fn stratified_targets_are_less_noisy() {
+        let points = repeated_samples();
+        for (c, component) in Component::ALL.iter().enumerate() {
+            let stratified: f64 = points.iter().map(|p| p[c].channel_variance).sum();
+            let independent: f64 = points.iter().map(|p| p[c].path_channel_variance / f64::from(PATHS)).sum();
+            assert!(stratified < 0.8 * independent, "{component:?}: {stratified:.3e} against {independent:.3e}");
+        }
+    }
 }

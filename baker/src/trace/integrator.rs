@@ -16,6 +16,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use glam::Vec3;
 
 use super::sampling::{Frame, Rng};
+use super::stratified::VertexSamples;
 use super::world::{Interaction, World};
 
 #[derive(Clone, Copy, Debug)]
@@ -130,18 +131,20 @@ pub fn trace_ray(world: &World, origin: Vec3, dir: Vec3, settings: &TraceSetting
     match world.intersect(origin, dir) {
         Some(hit) => {
             let si = world.interaction(origin, dir, hit);
-            radiance_leaving(world, &si, -dir, settings, rng)
+            radiance_leaving(world, &si, -dir, None, settings, rng)
         }
         None => Radiance::default(),
     }
 }
 
 /// One path-traced estimate of the radiance leaving `first` towards `wo` (unit, pointing
-/// away from the surface).
+/// away from the surface). The path's decisions at `first` take `first_samples` where given
+/// (a stratified set's, [`super::stratified`]), and every other one numbers from `rng`.
 pub fn radiance_leaving(
     world: &World,
     first: &Interaction,
     wo: Vec3,
+    first_samples: Option<&VertexSamples>,
     settings: &TraceSettings,
     rng: &mut Rng,
 ) -> Radiance {
@@ -155,6 +158,7 @@ pub fn radiance_leaving(
     let mut current: Option<Interaction> = None;
     while segments < settings.max_depth {
         let si = current.as_ref().unwrap_or(first);
+        let given = if current.is_none() { first_samples } else { None };
         let frame = Frame::new(si.shading_normal);
         let wo_local = frame.to_local(wo);
         if wo_local.z <= 0.0 {
@@ -163,7 +167,8 @@ pub fn radiance_leaving(
 
         // Next-event estimation: a path one segment longer.
         if world.has_area_lights() {
-            if let Some(light) = world.sample_area_light(si.position, rng.next_f32(), rng.next_vec2()) {
+            let (pick, u) = given.map_or_else(|| (rng.next_f32(), rng.next_vec2()), |v| (v.light_pick, v.light));
+            if let Some(light) = world.sample_area_light(si.position, pick, u) {
                 let wi = frame.to_local(light.direction);
                 let f = si.bsdf.eval(wo_local, wi);
                 if f != Vec3::ZERO && light.direction.dot(si.geometric_normal) > 0.0 {
@@ -179,7 +184,8 @@ pub fn radiance_leaving(
         out.add(segments + 1, beta * point_lights_at(world, si, &frame, wo_local));
 
         // Continue the path by sampling the BSDF.
-        let Some(sample) = si.bsdf.sample(wo_local, rng.next_f32(), rng.next_vec2()) else {
+        let (lobe, u) = given.map_or_else(|| (rng.next_f32(), rng.next_vec2()), |v| (v.lobe, v.direction));
+        let Some(sample) = si.bsdf.sample(wo_local, lobe, u) else {
             break;
         };
         let wi = frame.to_world(sample.wi);

@@ -7,6 +7,7 @@ pub mod geometry;
 pub mod integrator;
 pub mod render;
 pub mod sampling;
+pub mod stratified;
 pub mod world;
 
 pub use camera::Camera;
