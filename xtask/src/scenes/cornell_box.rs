@@ -75,11 +75,12 @@ max = [0.50, 0.50, 0.05]
 
 # Rays from the camera box find few learnable points here (most leave through the open front):
 # 8,000 rays per configuration (twice the preset) find 306,000, enough for the floor behind the
-# blocks and the blocks' shadow edges, trained to depth 3 with up to 100 iterations; 1,024 paths
-# per sample (4x the preset) keep the targets' noise low. Held-out gi FLIP 0.053 -> 0.041 against
-# 2048-spp references, and a final bake of about 8 minutes here (docs/experiments/deeper-tree-lambert.md and BENCHMARKS.md, "Baking").
+# blocks and the blocks' shadow edges, trained to depth 3 with up to 100 iterations; 512 paths per
+# sample (2x the preset), with the first bounce stratified, keep the targets' noise as low as
+# 1,024 independent paths did (docs/experiments/deeper-tree-lambert.md,
+# docs/experiments/stratified-first-vertex.md and BENCHMARKS.md, "Baking").
 [bake.final]
-paths_per_sample = 1024
+paths_per_sample = 512
 rays_per_configuration = 8000
 split_depth = 3
 max_iterations = 100
