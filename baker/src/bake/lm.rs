@@ -170,7 +170,7 @@ fn normal_equations(train: &Dataset, params: &[f32], hidden: &[Hidden<f32>]) -> 
             }
         })
         .collect();
-    let scale = train.len() as f64 / train.len().min(CURVATURE_SAMPLES).max(1) as f64;
+    let scale = train.len() as f64 / train.len().clamp(1, CURVATURE_SAMPLES) as f64;
     let mut jtj = Mat::<f64>::zeros(PARAMETERS, PARAMETERS);
     let mut jte = Mat::<f64>::zeros(PARAMETERS, 1);
     for (group_jtj, group_jte) in &groups {
