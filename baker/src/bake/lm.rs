@@ -189,14 +189,14 @@ fn normal_equations(train: &Dataset, params: &[f32], hidden: &[Hidden<f32>]) -> 
 /// One group's share of Jᵀe alone, in f32: the Jacobian's rows without their products.
 fn group_gradient(train: &Dataset, params: &[f32], hidden: &[Hidden<f32>], samples: Range<usize>) -> Mat<f32> {
     let mut jte = Mat::<f32>::zeros(PARAMETERS, 1);
+    let sum = jte.col_mut(0).try_as_col_major_mut().expect("contiguous column").as_slice_mut();
     let mut grads = Box::new([[0.0f32; PARAMETERS]; OUTPUTS]);
     for s in samples {
         let y = forward_with_jacobian_from(params, &train.inputs[s], &hidden[s], &mut grads);
         let gain = train.gain(s);
         for c in 0..OUTPUTS {
             let e = gain * (gain * y[c] - train.targets[s][c]);
-            let column = jte.col_mut(0).try_as_col_major_mut().expect("contiguous column").as_slice_mut();
-            column.iter_mut().zip(&grads[c]).for_each(|(j, g)| *j += e * g);
+            sum.iter_mut().zip(&grads[c]).for_each(|(j, g)| *j += e * g);
         }
     }
     jte

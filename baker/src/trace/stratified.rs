@@ -6,8 +6,8 @@
 //! under a random digital shift, and each one-dimensional decision (which light, which BSDF
 //! lobe) one point per stratum of `[0, 1)`. Every number is still uniform, so every path's
 //! estimate keeps its expectation, but together the paths cover each decision's domain
-//! evenly: on the Cornell box this halves the variance of a 512-path average of the direct
-//! and of the indirect light (`docs/experiments/stratified-first-vertex.md`).
+//! evenly: on the Cornell box a 128-path average has a quarter of the direct light's variance
+//! and two thirds of the indirect light's (`docs/experiments/stratified-first-vertex.md`).
 
 use glam::Vec2;
 
