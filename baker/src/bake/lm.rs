@@ -2,9 +2,6 @@
 //!
 //! Each iteration accumulates JᵀJ (523 × 523) and Jᵀe over the training set in chunks of
 //! rows, never holding the whole Jacobian, then solves `(JᵀJ + λI) δ = −Jᵀe` by Cholesky.
-//! JᵀJ, most of an iteration's time, comes from the first [`CURVATURE_SAMPLES`] training
-//! samples (the set is in random order), scaled to the whole set; Jᵀe and the test of each
-//! step use every sample (sub-sampled Gauss–Newton: Byrd, Chin, Neveitt and Nocedal 2011).
 //! λ shrinks tenfold after a step that lowers the training error and grows tenfold until one
 //! does (Levenberg's damping, as Hagan and Menhaj use it for networks; Marquardt's
 //! `λ·diag(JᵀJ)` converged about twice as slowly on rrf's samples).
@@ -144,62 +141,32 @@ pub fn initial_parameters(seed: u64, mean_target: [f32; OUTPUTS]) -> Vec<f32> {
     p
 }
 
-/// Training samples whose Jacobian rows make JᵀJ: on the Cornell box's `final` bake, a
-/// curvature from 4,096 of up to 10,200 samples cut training by a third at the same held-out
-/// error (`docs/experiments/subsampled-hessian.md`). A multiple of [`GROUP_SAMPLES`].
-pub const CURVATURE_SAMPLES: usize = 2 * GROUP_SAMPLES;
-
-/// JᵀJ (its lower triangle, from the first [`CURVATURE_SAMPLES`] samples and scaled to all of
-/// them) and Jᵀe (from all of them) at `params`, where the training rows' hidden activations
-/// are `hidden`.
+/// JᵀJ (its lower triangle) and Jᵀe at `params`, where the training rows' hidden
+/// activations are `hidden`.
 ///
 /// The products of the Jacobian's rows, most of an iteration's time, are in f32 (twice the
 /// SIMD width of f64) over at most [`GROUP_SAMPLES`] samples; the groups are summed, and the
 /// step solved, in f64. Groups run in parallel, so the last network of a bake still trains on
 /// every core.
 fn normal_equations(train: &Dataset, params: &[f32], hidden: &[Hidden<f32>]) -> (Mat<f64>, Mat<f64>) {
-    let groups: Vec<(Option<Mat<f32>>, Mat<f32>)> = (0..train.len().div_ceil(GROUP_SAMPLES))
+    let groups: Vec<(Mat<f32>, Mat<f32>)> = (0..train.len().div_ceil(GROUP_SAMPLES))
         .into_par_iter()
         .map(|g| {
             let samples = g * GROUP_SAMPLES..((g + 1) * GROUP_SAMPLES).min(train.len());
-            if samples.start < CURVATURE_SAMPLES {
-                let (jtj, jte) = group_normal_equations(train, params, hidden, samples);
-                (Some(jtj), jte)
-            } else {
-                (None, group_gradient(train, params, hidden, samples))
-            }
+            group_normal_equations(train, params, hidden, samples)
         })
         .collect();
-    let scale = train.len() as f64 / train.len().clamp(1, CURVATURE_SAMPLES) as f64;
     let mut jtj = Mat::<f64>::zeros(PARAMETERS, PARAMETERS);
     let mut jte = Mat::<f64>::zeros(PARAMETERS, 1);
     for (group_jtj, group_jte) in &groups {
         for j in 0..PARAMETERS {
-            if let Some(group_jtj) = group_jtj {
-                for i in j..PARAMETERS {
-                    jtj[(i, j)] += scale * f64::from(group_jtj[(i, j)]);
-                }
+            for i in j..PARAMETERS {
+                jtj[(i, j)] += f64::from(group_jtj[(i, j)]);
             }
             jte[(j, 0)] += f64::from(group_jte[(j, 0)]);
         }
     }
     (jtj, jte)
-}
-
-/// One group's share of Jᵀe alone, in f32: the Jacobian's rows without their products.
-fn group_gradient(train: &Dataset, params: &[f32], hidden: &[Hidden<f32>], samples: Range<usize>) -> Mat<f32> {
-    let mut jte = Mat::<f32>::zeros(PARAMETERS, 1);
-    let sum = jte.col_mut(0).try_as_col_major_mut().expect("contiguous column").as_slice_mut();
-    let mut grads = Box::new([[0.0f32; PARAMETERS]; OUTPUTS]);
-    for s in samples {
-        let y = forward_with_jacobian_from(params, &train.inputs[s], &hidden[s], &mut grads);
-        let gain = train.gain(s);
-        for c in 0..OUTPUTS {
-            let e = gain * (gain * y[c] - train.targets[s][c]);
-            sum.iter_mut().zip(&grads[c]).for_each(|(j, g)| *j += e * g);
-        }
-    }
-    jte
 }
 
 /// One group's share of [`normal_equations`], in f32.

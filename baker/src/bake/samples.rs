@@ -25,8 +25,8 @@ pub struct Sample {
     pub direct: [f32; 3],
     pub indirect: [f32; 3],
     /// The variance of each target's path average (direct, indirect; mean over the channels),
-    /// estimated from the spread of its paths: the part of a network's squared error on this
-    /// sample that no network can remove.
+    /// estimated from the spread of its independent groups of paths (`NOISE_GROUPS`): the
+    /// part of a network's squared error on this sample that no network can remove.
     pub noise: [f32; 2],
 }
 
