@@ -200,11 +200,11 @@ fn sample_along(
     // The variance of the mean: the spread of the groups' means, which are independent
     // estimates (the paths within a group are not independent of each other), over their
     // number. It assumes groups of equal size; they differ by one path at most.
-    let noise = |component: fn(&Radiance) -> Vec3| {
+    let noise = |component: Component| {
         let g = groups as f32;
         let spread: Vec3 = (0..groups)
             .map(|k| {
-                let d = component(&sums[k]) / strata[k].len().max(1) as f32 - component(&mean);
+                let d = part(&sums[k], component) / strata[k].len().max(1) as f32 - part(&mean, component);
                 d * d
             })
             .sum();
@@ -216,8 +216,16 @@ fn sample_along(
         inputs: raw_inputs(si.position, -dir, config.light, si.shading_normal, si.roughness),
         direct: (mean.direct / r).to_array(),
         indirect: (mean.indirect / r).to_array(),
-        noise: [noise(|l| l.direct), noise(|l| l.indirect)],
+        noise: Component::ALL.map(noise),
     })
+}
+
+/// The part of `radiance` that `component`'s networks learn.
+fn part(radiance: &Radiance, component: Component) -> Vec3 {
+    match component {
+        Component::Direct => radiance.direct,
+        Component::Indirect => radiance.indirect,
+    }
 }
 
 /// Flat little-endian encoding of samples for shard files: per sample the object id (u32),
@@ -263,6 +271,7 @@ pub fn decode(bytes: &[u8], objects: usize) -> Option<Vec<Sample>> {
 #[cfg(test)]
 mod tests {
     use std::path::Path;
+    use std::sync::LazyLock;
 
     use super::*;
 
@@ -290,6 +299,9 @@ mod tests {
         path_variance: f64,
         path_channel_variance: f64,
     }
+
+    /// [`repeated_samples`], computed once for the tests that read it.
+    static REPEATED: LazyLock<Vec<[Repeated; 2]>> = LazyLock::new(repeated_samples);
 
     /// Points on the Cornell box's floor, walls and blocks, seen from one configuration; for
     /// each, [`SEEDS`] samples of [`PATHS`] paths, and as many paths traced independently.
@@ -322,10 +334,7 @@ mod tests {
                     samples.iter().map(|s| (value(s) - mean).powi(2)).sum::<f64>() / (n - 1.0)
                 };
                 let mean = (0..3).map(channel_mean).sum::<f64>() / 3.0;
-                let target = |l: &Radiance| match c {
-                    Component::Direct => l.direct / r,
-                    Component::Indirect => l.indirect / r,
-                };
+                let target = |l: &Radiance| part(l, c) / r;
                 let m = independent.len() as f64;
                 let path_channel = |l: &Radiance, k: usize| f64::from(target(l)[k]);
                 let path_channel_mean = |k: usize| independent.iter().map(|l| path_channel(l, k)).sum::<f64>() / m;
@@ -359,7 +368,7 @@ mod tests {
     /// stratification removed.
     #[test]
     fn declared_noise_is_the_variance_between_bakes() {
-        let points = repeated_samples();
+        let points = &*REPEATED;
         for (c, component) in Component::ALL.iter().enumerate() {
             let variance: f64 = points.iter().map(|p| p[c].channel_variance).sum();
             let declared: f64 = points.iter().map(|p| p[c].declared).sum();
@@ -373,7 +382,7 @@ mod tests {
     /// the points and components, at the 0.1% level).
     #[test]
     fn stratified_targets_keep_their_expectation() {
-        let points = repeated_samples();
+        let points = &*REPEATED;
         let (mut chi2, mut dof) = (0.0, 0);
         for p in points.iter().flatten() {
             let variance = (p.variance + p.path_variance / f64::from(PATHS)) / SEEDS as f64;
@@ -391,7 +400,7 @@ mod tests {
     /// And they vary less from bake to bake than the mean of as many independent paths does.
     #[test]
     fn stratified_targets_are_less_noisy() {
-        let points = repeated_samples();
+        let points = &*REPEATED;
         for (c, component) in Component::ALL.iter().enumerate() {
             let stratified: f64 = points.iter().map(|p| p[c].channel_variance).sum();
             let independent: f64 = points.iter().map(|p| p[c].path_channel_variance / f64::from(PATHS)).sum();

@@ -31,7 +31,7 @@ impl Rng {
 
     /// Uniform in [0, 1).
     pub fn next_f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+        unit_f32(self.next_u32())
     }
 
     pub fn next_vec2(&mut self) -> Vec2 {
@@ -44,6 +44,11 @@ impl Rng {
             items.swap(i, self.next_u32() as usize % (i + 1));
         }
     }
+}
+
+/// A 32-bit fraction as an `f32` in [0, 1): its top 24 bits, exactly.
+pub fn unit_f32(bits: u32) -> f32 {
+    (bits >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
 /// SplitMix64's finaliser: decorrelates nearby seeds and stream ids.

@@ -11,7 +11,7 @@
 
 use glam::Vec2;
 
-use super::sampling::Rng;
+use super::sampling::{unit_f32, Rng};
 
 /// The random numbers a path uses at one scattering vertex.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,11 +42,6 @@ fn sobol_2d(i: u32) -> (u32, u32) {
     (i.reverse_bits(), y)
 }
 
-/// A 32-bit fraction as an `f32` in `[0, 1)`, as [`Rng::next_f32`] makes one.
-fn unit(bits: u32) -> f32 {
-    (bits >> 8) as f32 * (1.0 / 16_777_216.0)
-}
-
 /// `count` vertex samples that stratify each decision of the vertex, from `rng`. Each two-
 /// dimensional decision takes the first `count` points of the Sobol' sequence, shifted by its
 /// own random XOR (which keeps the net's strata); the direction takes them in a random order,
@@ -62,7 +57,7 @@ pub fn stratified_vertex_samples(count: usize, rng: &mut Rng) -> Vec<VertexSampl
     let (direction_order, pick_order, lobe_order) = (shuffled(rng), shuffled(rng), shuffled(rng));
     let net = |i: u32, [sx, sy]: [u32; 2]| {
         let (x, y) = sobol_2d(i);
-        Vec2::new(unit(x ^ sx), unit(y ^ sy))
+        Vec2::new(unit_f32(x ^ sx), unit_f32(y ^ sy))
     };
     let stratum = |k: u32, rng: &mut Rng| ((k as f32 + rng.next_f32()) / count as f32).min(1.0 - f32::EPSILON / 2.0);
     (0..count)
