@@ -197,16 +197,7 @@ pub fn forward_with_jacobian<T: Real>(
     x: &[T; INPUTS],
     jacobian: &mut [[T; PARAMETERS]; OUTPUTS],
 ) -> [T; OUTPUTS] {
-    forward_with_jacobian_from(p, x, &hidden_layers(p, x), jacobian)
-}
-
-/// [`forward_with_jacobian`] from the hidden layers' activations, `hidden_layers(p, x)`.
-pub fn forward_with_jacobian_from<T: Real>(
-    p: &[T],
-    x: &[T; INPUTS],
-    (h1, h2): &Hidden<T>,
-    jacobian: &mut [[T; PARAMETERS]; OUTPUTS],
-) -> [T; OUTPUTS] {
+    let (h1, h2) = hidden_layers(p, x);
     let mut y = [T::ZERO; OUTPUTS];
     for c in 0..OUTPUTS {
         let g = &mut jacobian[c];

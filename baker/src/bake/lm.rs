@@ -1,7 +1,7 @@
 //! Levenberg–Marquardt training of one network.
 //!
-//! Each iteration accumulates JᵀJ (523 × 523) and Jᵀe over the training set in chunks of
-//! rows, never holding the whole Jacobian, then solves `(JᵀJ + λI) δ = −Jᵀe` by Cholesky.
+//! Each iteration accumulates JᵀJ (523 × 523) and Jᵀe over the training set, never holding
+//! the whole Jacobian ([`super::normal_equations`]), then solves `(JᵀJ + λI) δ = −Jᵀe` by Cholesky.
 //! λ shrinks tenfold after a step that lowers the training error and grows tenfold until one
 //! does (Levenberg's damping, as Hagan and Menhaj use it for networks; Marquardt's
 //! `λ·diag(JᵀJ)` converged about twice as slowly on rrf's samples).
@@ -10,20 +10,16 @@
 //!
 //! Checking a step evaluates the network on every training row at the new parameters; when the
 //! step is taken, that evaluation's loss and hidden activations serve the next iteration, so
-//! its Jacobian pass runs no tanh.
+//! its normal equations run no tanh.
 
-use std::ops::Range;
 use std::time::Instant;
 
-use faer::linalg::matmul::matmul;
-use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::linalg::solvers::Solve;
-use faer::{Accum, Mat, Par, Side};
-use rayon::prelude::*;
+use faer::{Mat, Side};
 
+use super::normal_equations::normal_equations;
 use crate::network::{
-    forward, forward_with_jacobian_from, hidden_layers, output_layer, Hidden, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS,
-    OUTPUTS, PARAMETERS, W1, W2, W3,
+    forward, hidden_layers, output_layer, Hidden, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3,
 };
 use crate::trace::sampling::Rng;
 
@@ -48,7 +44,7 @@ impl Dataset {
     }
 
     /// Row `i`'s gain.
-    fn gain(&self, i: usize) -> f32 {
+    pub(super) fn gain(&self, i: usize) -> f32 {
         self.gains.get(i).copied().unwrap_or(1.0)
     }
 
@@ -107,14 +103,6 @@ pub struct LmResult {
     pub history: Vec<(f64, f64)>,
 }
 
-/// Samples per chunk of Jacobian rows: a chunk's Jᵀ (523 × 768 f32) stays in the cache.
-const CHUNK_SAMPLES: usize = 256;
-
-/// Samples per group: each group's share of JᵀJ is summed in f32, chunk by chunk, and the
-/// groups' shares in f64, in order, so that the sum is the same whichever threads computed
-/// the groups.
-const GROUP_SAMPLES: usize = 2048;
-
 /// Nguyen–Widrow initialisation of the two tanh layers; a small random output layer whose
 /// bias starts at the mean target.
 pub fn initial_parameters(seed: u64, mean_target: [f32; OUTPUTS]) -> Vec<f32> {
@@ -139,78 +127,6 @@ pub fn initial_parameters(seed: u64, mean_target: [f32; OUTPUTS]) -> Vec<f32> {
     }
     p[B3..B3 + OUTPUTS].copy_from_slice(&mean_target);
     p
-}
-
-/// JᵀJ (its lower triangle) and Jᵀe at `params`, where the training rows' hidden
-/// activations are `hidden`.
-///
-/// The products of the Jacobian's rows, most of an iteration's time, are in f32 (twice the
-/// SIMD width of f64) over at most [`GROUP_SAMPLES`] samples; the groups are summed, and the
-/// step solved, in f64. Groups run in parallel, so the last network of a bake still trains on
-/// every core.
-fn normal_equations(train: &Dataset, params: &[f32], hidden: &[Hidden<f32>]) -> (Mat<f64>, Mat<f64>) {
-    let groups: Vec<(Mat<f32>, Mat<f32>)> = (0..train.len().div_ceil(GROUP_SAMPLES))
-        .into_par_iter()
-        .map(|g| {
-            let samples = g * GROUP_SAMPLES..((g + 1) * GROUP_SAMPLES).min(train.len());
-            group_normal_equations(train, params, hidden, samples)
-        })
-        .collect();
-    let mut jtj = Mat::<f64>::zeros(PARAMETERS, PARAMETERS);
-    let mut jte = Mat::<f64>::zeros(PARAMETERS, 1);
-    for (group_jtj, group_jte) in &groups {
-        for j in 0..PARAMETERS {
-            for i in j..PARAMETERS {
-                jtj[(i, j)] += f64::from(group_jtj[(i, j)]);
-            }
-            jte[(j, 0)] += f64::from(group_jte[(j, 0)]);
-        }
-    }
-    (jtj, jte)
-}
-
-/// One group's share of [`normal_equations`], in f32.
-fn group_normal_equations(
-    train: &Dataset,
-    params: &[f32],
-    hidden: &[Hidden<f32>],
-    samples: Range<usize>,
-) -> (Mat<f32>, Mat<f32>) {
-    let mut jtj = Mat::<f32>::zeros(PARAMETERS, PARAMETERS);
-    let mut jte = Mat::<f32>::zeros(PARAMETERS, 1);
-    // Jᵀ of one chunk, column per residual, so that each Jacobian row is written contiguously.
-    let mut jt = Mat::<f32>::zeros(PARAMETERS, CHUNK_SAMPLES * OUTPUTS);
-    let mut e = Mat::<f32>::zeros(CHUNK_SAMPLES * OUTPUTS, 1);
-    let mut grads = Box::new([[0.0f32; PARAMETERS]; OUTPUTS]);
-    for start in samples.clone().step_by(CHUNK_SAMPLES) {
-        let end = (start + CHUNK_SAMPLES).min(samples.end);
-        let rows = (end - start) * OUTPUTS;
-        for (n, s) in (start..end).enumerate() {
-            let y = forward_with_jacobian_from(params, &train.inputs[s], &hidden[s], &mut grads);
-            let gain = train.gain(s);
-            for c in 0..OUTPUTS {
-                let col = n * OUTPUTS + c;
-                e[(col, 0)] = gain * y[c] - train.targets[s][c];
-                let column = jt.col_mut(col).try_as_col_major_mut().expect("contiguous column").as_slice_mut();
-                column.iter_mut().zip(&grads[c]).for_each(|(j, g)| *j = gain * g);
-            }
-        }
-        let jt_chunk = jt.as_ref().subcols(0, rows);
-        // Only the lower triangle: JᵀJ is symmetric and the Cholesky reads no more.
-        triangular::matmul(
-            jtj.as_mut(),
-            BlockStructure::TriangularLower,
-            Accum::Add,
-            jt_chunk,
-            BlockStructure::Rectangular,
-            jt_chunk.transpose(),
-            BlockStructure::Rectangular,
-            1.0,
-            Par::Seq,
-        );
-        matmul(jte.as_mut(), Accum::Add, jt_chunk, e.as_ref().subrows(0, rows), 1.0, Par::Seq);
-    }
-    (jtj, jte)
 }
 
 /// The damping past which Levenberg–Marquardt gives up: the step is then a vanishing

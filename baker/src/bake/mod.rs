@@ -15,6 +15,7 @@
 mod cache;
 pub mod lm;
 pub mod lock;
+mod normal_equations;
 pub mod samples;
 mod train;
 
