@@ -225,7 +225,7 @@ fn blocks() -> Vec<Block> {
 /// hidden activations are `hidden`.
 pub fn normal_equations(train: &Dataset, params: &[f32], hidden: &[Hidden<f32>]) -> (Mat<f64>, Mat<f64>) {
     let blocks = blocks();
-    let groups: Vec<(Vec<Mat<f32>>, [f32; PARAMETERS])> = (0..train.len().div_ceil(GROUP_SAMPLES))
+    let groups: Vec<GroupSums> = (0..train.len().div_ceil(GROUP_SAMPLES))
         .into_par_iter()
         .map(|g| {
             let samples = g * GROUP_SAMPLES..((g + 1) * GROUP_SAMPLES).min(train.len());
@@ -241,24 +241,33 @@ pub fn normal_equations(train: &Dataset, params: &[f32], hidden: &[Hidden<f32>])
         }
         block.scatter(sum.as_ref(), &mut jtj);
     }
-    for (_, group_jte) in &groups {
-        for (i, v) in group_jte.iter().enumerate() {
-            jte[(i, 0)] += f64::from(*v);
+    for (l, layer) in LAYERS.iter().enumerate() {
+        for (_, gradient) in &groups {
+            for j in 0..layer.deltas {
+                for a in 0..layer.inputs {
+                    jte[((layer.parameter)(j, a), 0)] += f64::from(gradient[l][(j, a)]);
+                }
+            }
         }
     }
     (jtj, jte)
 }
 
-/// One group's sum of each block's products, and its Jᵀe, in f32.
+/// One group's sum of each block's products, and its Jᵀe per layer ([`accumulate_gradient`]),
+/// in f32.
+type GroupSums = (Vec<Mat<f32>>, [Mat<f32>; 3]);
+
+/// [`GroupSums`] of `train`'s `samples`.
 fn group_sums(
     train: &Dataset,
     params: &[f32],
     hidden: &[Hidden<f32>],
     samples: Range<usize>,
     blocks: &[Block],
-) -> (Vec<Mat<f32>>, [f32; PARAMETERS]) {
+) -> GroupSums {
     let mut sums: Vec<Mat<f32>> = blocks.iter().map(|b| Mat::zeros(b.delta_pairs.len(), b.input_pairs.len())).collect();
-    let mut jte = [0.0f32; PARAMETERS];
+    let mut gradient = LAYERS.map(|l| Mat::zeros(l.deltas, l.inputs));
+    let mut back = vec![0.0f32; MAX_DELTAS * CHUNK_SAMPLES];
     let widest = |pairs: fn(&Block) -> usize| blocks.iter().map(pairs).max().unwrap_or(0);
     // A block's factor matrices for the chunk: a column per pair, an entry per sample.
     let mut deltas = vec![0.0f32; widest(|b| b.delta_pairs.len()) * CHUNK_SAMPLES];
@@ -267,22 +276,22 @@ fn group_sums(
     for start in samples.clone().step_by(CHUNK_SAMPLES) {
         chunk.fill(train, params, hidden, start..(start + CHUNK_SAMPLES).min(samples.end));
         let n = chunk.len;
-        accumulate_gradient(&chunk, &mut jte);
+        accumulate_gradient(&chunk, &mut gradient, &mut back);
         let gain2: Vec<f32> = chunk.gain[..n].iter().map(|g| g * g).collect();
         for (block, sum) in blocks.iter().zip(&mut sums) {
             let (rows, cols) = (block.delta_pairs.len(), block.input_pairs.len());
             for (column, &(j, k)) in deltas.chunks_exact_mut(CHUNK_SAMPLES).zip(&block.delta_pairs) {
-                let u: [&[f32]; OUTPUTS] = std::array::from_fn(|c| chunk.delta(block.high, c, j));
-                let v: [&[f32]; OUTPUTS] = std::array::from_fn(|c| chunk.delta(block.low, c, k));
-                for (i, (out, g)) in column[..n].iter_mut().zip(&gain2).enumerate() {
-                    *out = g * (u[0][i] * v[0][i] + u[1][i] * v[1][i] + u[2][i] * v[2][i]);
+                let [u0, u1, u2] = [0, 1, 2].map(|c| chunk.delta(block.high, c, j));
+                let [v0, v1, v2] = [0, 1, 2].map(|c| chunk.delta(block.low, c, k));
+                let (column, gain2) = (&mut column[..n], &gain2[..n]);
+                for i in 0..n {
+                    column[i] = gain2[i] * (u0[i] * v0[i] + u1[i] * v1[i] + u2[i] * v2[i]);
                 }
             }
             for (column, &(a, b)) in inputs.chunks_exact_mut(CHUNK_SAMPLES).zip(&block.input_pairs) {
-                for (out, (u, v)) in
-                    column[..n].iter_mut().zip(chunk.input(block.high, a).iter().zip(chunk.input(block.low, b)))
-                {
-                    *out = u * v;
+                let (column, u, v) = (&mut column[..n], chunk.input(block.high, a), chunk.input(block.low, b));
+                for i in 0..n {
+                    column[i] = u[i] * v[i];
                 }
             }
             let deltas = MatRef::from_column_major_slice(&deltas[..rows * CHUNK_SAMPLES], CHUNK_SAMPLES, rows);
@@ -290,28 +299,29 @@ fn group_sums(
             matmul(sum.as_mut(), Accum::Add, deltas.subrows(0, n).transpose(), inputs.subrows(0, n), 1.0, Par::Seq);
         }
     }
-    (sums, jte)
+    (sums, gradient)
 }
 
-/// Adds a chunk's share of Jᵀe: `Σ_samples gain · Σ_c e_c δℓ_c[j] ãℓ[a]` for every weight.
-fn accumulate_gradient(chunk: &Chunk, jte: &mut [f32; PARAMETERS]) {
+/// Adds a chunk's share of Jᵀe to `gradient` (per layer, one row per δ, one column per ã):
+/// `Σ_samples (gain · Σ_c e_c δℓ_c[j]) ãℓ[a]`, a matrix product of the first factor's columns
+/// by the layer's inputs.
+fn accumulate_gradient(chunk: &Chunk, gradient: &mut [Mat<f32>; 3], back: &mut [f32]) {
     let n = chunk.len;
-    let mut back = [0.0f32; CHUNK_SAMPLES];
-    for (l, layer) in LAYERS.iter().enumerate() {
-        for j in 0..layer.deltas {
-            back[..n].fill(0.0);
+    for (l, (layer, gradient)) in LAYERS.iter().zip(gradient).enumerate() {
+        for (j, back) in back.chunks_exact_mut(CHUNK_SAMPLES).take(layer.deltas).enumerate() {
+            let back = &mut back[..n];
+            back.fill(0.0);
             for c in 0..OUTPUTS {
-                let residual = &chunk.residual[Chunk::range(c)][..n];
-                for ((b, d), (e, g)) in back.iter_mut().zip(chunk.delta(l, c, j)).zip(residual.iter().zip(&chunk.gain))
-                {
-                    *b += g * e * d;
+                let (delta, residual, gain) = (chunk.delta(l, c, j), &chunk.residual[Chunk::range(c)], &chunk.gain);
+                for i in 0..n {
+                    back[i] += gain[i] * residual[i] * delta[i];
                 }
             }
-            for a in 0..layer.inputs {
-                jte[(layer.parameter)(j, a)] +=
-                    back[..n].iter().zip(chunk.input(l, a)).map(|(b, x)| b * x).sum::<f32>();
-            }
         }
+        let back = MatRef::from_column_major_slice(&back[..layer.deltas * CHUNK_SAMPLES], CHUNK_SAMPLES, layer.deltas);
+        let inputs = &chunk.input[l * MAX_INPUTS * CHUNK_SAMPLES..(l * MAX_INPUTS + layer.inputs) * CHUNK_SAMPLES];
+        let inputs = MatRef::from_column_major_slice(inputs, CHUNK_SAMPLES, layer.inputs);
+        matmul(gradient.as_mut(), Accum::Add, back.subrows(0, n).transpose(), inputs.subrows(0, n), 1.0, Par::Seq);
     }
 }
 
