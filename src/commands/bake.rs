@@ -285,6 +285,7 @@ pub fn run(args: &BakeArgs) -> Result<()> {
             "quality": quality,
             "seed": args.seed,
             "samples": report.samples,
+            "traced_samples": report.traced_samples,
             "paths": report.paths,
             "sample_seconds": report.sample_seconds,
             "train_seconds": report.train_seconds,
@@ -305,8 +306,9 @@ pub fn run(args: &BakeArgs) -> Result<()> {
         _ => format!(" ({done} of {of} {what} resumed from {})", cache.display()),
     };
     eprintln!(
-        "sampled {} samples ({} paths) in {:.1} s{}; trained {} networks in {:.1} s{}",
+        "found {} samples, traced the {} that training reads ({} paths) in {:.1} s{}; trained {} networks in {:.1} s{}",
         report.samples,
+        report.traced_samples,
         report.paths,
         report.sample_seconds,
         resumed(report.resumed_shards, report.shards, "shards"),

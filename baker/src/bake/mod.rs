@@ -34,7 +34,7 @@ use crate::trace::integrator::non_finite_dropped;
 use crate::trace::sampling::mix64;
 use crate::trace::{Geometry, TraceSettings};
 use glam::Vec3;
-use samples::{latin_hypercube, sample_configuration, Aim, Sample, SurfacePoints, SAMPLE_BYTES};
+use samples::{latin_hypercube, sample_rays, Aim, Sample, SurfacePoints, SAMPLE_BYTES};
 use serde::Deserialize;
 use train::train_tree;
 pub use train::{network_data, NetworkData, Node};
@@ -242,7 +242,9 @@ pub const MAX_SAMPLE_BYTES: u64 = 16 << 30;
 /// What a bake (or a part of one) did; a stage's shard fills what it got to.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct BakeReport {
+    /// Samples found; of them, those whose targets training reads, the only ones traced.
     pub samples: usize,
+    pub traced_samples: usize,
     pub paths: u64,
     pub sample_seconds: f64,
     pub train_seconds: f64,
@@ -396,9 +398,61 @@ pub fn bake_part(
     let geometry = Geometry::new(scene);
     let configs = latin_hypercube(settings.configurations as usize, &light.bounds, camera, settings.seed);
 
-    // Sampling, shard by shard: rays over the sphere from every configuration's viewpoint,
-    // then rays aimed at the objects that those rarely hit.
+    // Where the samples are: rays over the sphere from every configuration's viewpoint, then
+    // rays aimed at the objects that those rarely hit, located without paths.
     let start = Instant::now();
+    let trace = settings.trace();
+    let sphere_seed = |i: usize| mix64(settings.seed ^ mix64(i as u64 + 1));
+    let sphere_rays = |i: usize, rays: &mut dyn Iterator<Item = u32>, paths: u32| {
+        sample_rays(scene, &geometry, &configs[i], Aim::Sphere, rays, paths, &trace, sphere_seed(i))
+    };
+    let rays = settings.rays_per_configuration;
+    let sphere_points: Vec<Vec<(u32, Sample)>> =
+        (0..configs.len()).into_par_iter().map(|i| sphere_rays(i, &mut (0..rays), 0)).collect();
+    let mut counts = vec![0usize; scene.objects.len()];
+    sphere_points.iter().flatten().for_each(|(_, s)| counts[s.object as usize] += 1);
+    let aimed: Vec<SurfacePoints> = scene
+        .objects
+        .iter()
+        .filter(|o| learns(scene, o.id) && counts[o.id as usize] < AIM_BELOW * settings.min_samples)
+        .map(|o| SurfacePoints::new(scene, o.id))
+        .collect();
+    let aimed_rays = (AIMED_RAYS * settings.min_samples).div_ceil(configs.len()) as u32;
+    // A configuration's aimed rays: those at each aimed object in turn, numbered by object
+    // (`target`) and ray.
+    let aimed_samples = |i: usize, rays: &mut dyn Iterator<Item = (usize, u32)>, paths: u32| {
+        let seed = mix64(settings.seed ^ mix64(i as u64 + 1) ^ AIMED_STREAM);
+        let rays: Vec<(usize, u32)> = rays.collect();
+        let mut samples = Vec::new();
+        for (target, t) in aimed.iter().enumerate() {
+            let seed = mix64(seed ^ u64::from(t.object()));
+            let mine = rays.iter().filter(|(of, _)| *of == target).map(|&(_, ray)| ray);
+            let found = sample_rays(scene, &geometry, &configs[i], Aim::At(t), mine, paths, &trace, seed);
+            samples.extend(found.into_iter().map(|(ray, s)| ((target, ray), s)));
+        }
+        samples
+    };
+    let aimed_points: Vec<Vec<((usize, u32), Sample)>> = (0..configs.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut every = (0..aimed.len()).flat_map(|target| (0..aimed_rays).map(move |ray| (target, ray)));
+            aimed_samples(i, &mut every, 0)
+        })
+        .collect();
+
+    // The samples whose targets training reads: paths are traced for these alone.
+    let points: Vec<Sample> =
+        sphere_points.iter().flatten().map(|(_, s)| *s).chain(aimed_points.iter().flatten().map(|(_, s)| *s)).collect();
+    let read = samples_read(scene, settings, &points);
+    // Each configuration's rays to trace, taking `read` in order.
+    fn selected<T>(rays: Vec<(T, Sample)>, read: &mut impl Iterator<Item = bool>) -> Vec<T> {
+        rays.into_iter().filter(|_| read.next() == Some(true)).map(|(ray, _)| ray).collect()
+    }
+    let mut flags = read.iter().copied();
+    let sphere_selected: Vec<Vec<u32>> = sphere_points.into_iter().map(|c| selected(c, &mut flags)).collect();
+    let aimed_selected: Vec<Vec<(usize, u32)>> = aimed_points.into_iter().map(|c| selected(c, &mut flags)).collect();
+
+    // Tracing, shard by shard.
     let dropped_before = non_finite_dropped();
     let corrupt = AtomicUsize::new(0);
     let settings_json = serde_json::to_string(&SamplingKey::from(settings)).expect("settings serialise");
@@ -417,10 +471,10 @@ pub fn bake_part(
     };
     let mut report = BakeReport::default();
     let sample_work = part.work(Stage::Sample).expect("every part reads the first stage");
-    let sphere = shards.run("shard", &[], Stage::Sample, sample_work, &sampled, |i| {
-        let seed = mix64(settings.seed ^ mix64(i as u64 + 1));
-        let (rays, paths) = (settings.rays_per_configuration, settings.paths_per_sample);
-        sample_configuration(scene, &geometry, &configs[i], Aim::Sphere, rays, paths, &settings.trace(), seed)
+    let paths = settings.paths_per_sample;
+    let sphere_key = selection_key(sphere_selected.iter().map(|c| c.iter().map(|&ray| (0, ray))));
+    let sphere = shards.run("shard", &sphere_key, Stage::Sample, sample_work, &sampled, |i| {
+        sphere_rays(i, &mut sphere_selected[i].iter().copied(), paths).into_iter().map(|(_, s)| s).collect()
     })?;
     if !matches!(sample_work, Work::Read) {
         report.add_shards(&sphere);
@@ -429,26 +483,13 @@ pub fn bake_part(
         report.finish_sampling(start, dropped_before, &corrupt);
         return Ok((None, report));
     };
-    let mut counts = vec![0usize; scene.objects.len()];
-    sphere.samples.iter().for_each(|s| counts[s.object as usize] += 1);
-    let aimed: Vec<SurfacePoints> = scene
-        .objects
-        .iter()
-        .filter(|o| learns(scene, o.id) && counts[o.id as usize] < AIM_BELOW * settings.min_samples)
-        .map(|o| SurfacePoints::new(scene, o.id))
-        .collect();
-    let aimed_rays = (AIMED_RAYS * settings.min_samples).div_ceil(configs.len()) as u32;
-    let aimed_key: Vec<u8> = aimed.iter().flat_map(|t| t.object().to_le_bytes()).collect();
+    let mut aimed_key: Vec<u8> = aimed.iter().flat_map(|t| t.object().to_le_bytes()).collect();
+    aimed_key.extend(selection_key(aimed_selected.iter().map(|c| c.iter().copied())));
     let extra = match aimed.is_empty() {
         true => Sampled::default(),
         false => shards.run("aimed", &aimed_key, Stage::Aim, aim_work, &|_| {}, |i| {
-            let seed = mix64(settings.seed ^ mix64(i as u64 + 1) ^ AIMED_STREAM);
-            let (rays, paths) = (aimed_rays, settings.paths_per_sample);
-            let sample = |t: &SurfacePoints| {
-                let seed = mix64(seed ^ u64::from(t.object()));
-                sample_configuration(scene, &geometry, &configs[i], Aim::At(t), rays, paths, &settings.trace(), seed)
-            };
-            aimed.iter().flat_map(sample).collect()
+            let found = aimed_samples(i, &mut aimed_selected[i].iter().copied(), paths);
+            found.into_iter().map(|(_, s)| s).collect()
         })?,
     };
     if !matches!(aim_work, Work::Read) {
@@ -459,9 +500,19 @@ pub fn bake_part(
     let Some(train_work) = part.work(Stage::Train) else {
         return Ok((None, report));
     };
-    let all: Vec<Sample> = sphere.samples.into_iter().chain(extra.samples).collect();
+    let mut traced = sphere.samples.into_iter().chain(extra.samples);
+    let all: Vec<Sample> = points
+        .iter()
+        .zip(&read)
+        .map(|(point, &read)| match read {
+            true => traced.next().expect("a traced sample for every one read"),
+            // Never read: NaN would poison any network that learned from it.
+            false => Sample { direct: [f32::NAN; 3], indirect: [f32::NAN; 3], ..*point },
+        })
+        .collect();
     report.samples = all.len();
-    report.paths = all.len() as u64 * u64::from(settings.paths_per_sample);
+    report.traced_samples = read.iter().filter(|&&r| r).count();
+    report.paths = report.traced_samples as u64 * u64::from(settings.paths_per_sample);
 
     // Training: two networks per object that has samples (one with `Trained::IndirectOnly`).
     let start = Instant::now();
@@ -509,7 +560,7 @@ struct TrainingPlan<'a> {
 
 /// Per object, the samples it borrows from its neighbours (see [`borrow_samples`]) if it
 /// learns and `all` holds fewer than `min_samples` of its own.
-fn lend_samples(scene: &Scene, settings: &BakeSettings, all: &[Sample]) -> Vec<Option<(Vec<Sample>, String)>> {
+fn lend_samples(scene: &Scene, settings: &BakeSettings, all: &[Sample]) -> Vec<Option<Lent>> {
     let mut counts = vec![0usize; scene.objects.len()];
     all.iter().for_each(|s| counts[s.object as usize] += 1);
     let short = |id: u32| learns(scene, id) && counts[id as usize] < settings.min_samples;
@@ -527,7 +578,7 @@ fn plan_training<'a>(
     scene: &Scene,
     settings: &BakeSettings,
     all: &'a [Sample],
-    lent: &'a [Option<(Vec<Sample>, String)>],
+    lent: &'a [Option<Lent>],
 ) -> Result<TrainingPlan<'a>, BakeError> {
     let mut by_object: Vec<Vec<&Sample>> = vec![Vec::new(); scene.objects.len()];
     for s in all {
@@ -543,9 +594,9 @@ fn plan_training<'a>(
         let own = by_object[object.id as usize].len();
         if own < settings.min_samples {
             match &lent[object.id as usize] {
-                Some((extra, reason)) => {
-                    by_object[object.id as usize].extend(extra);
-                    borrowed.push(Untrained { object: object.name.clone(), samples: own, reason: reason.clone() });
+                Some(lent) => {
+                    by_object[object.id as usize].extend(&lent.samples);
+                    borrowed.push(Untrained { object: object.name.clone(), samples: own, reason: lent.reason.clone() });
                 }
                 None => {
                     untrained.push(Untrained {
@@ -582,6 +633,44 @@ fn plan_training<'a>(
         return Err(BakeError::NoNetworks { scene: scene.gltf_path.clone(), cause });
     }
     Ok(TrainingPlan { by_object, jobs, untrained, borrowed })
+}
+
+/// Which of `points` (every sample of a bake, located but not traced, in the bake's order)
+/// training reads the targets of: [`train::targets_read`] of each object that gets networks,
+/// on its samples and on those lent to it.
+fn samples_read(scene: &Scene, settings: &BakeSettings, points: &[Sample]) -> Vec<bool> {
+    let mut read = vec![false; points.len()];
+    let lent = lend_samples(scene, settings, points);
+    let Ok(plan) = plan_training(scene, settings, points, &lent) else {
+        return read; // no network: training says why
+    };
+    let mut own: Vec<Vec<usize>> = vec![Vec::new(); scene.objects.len()];
+    points.iter().enumerate().for_each(|(i, s)| own[s.object as usize].push(i));
+    let mut objects: Vec<u32> = plan.jobs.iter().map(|&(object, _)| object).collect();
+    objects.dedup();
+    for object in objects {
+        let samples = &plan.by_object[object as usize];
+        let borrowed = lent[object as usize].as_ref().filter(|_| samples.len() > own[object as usize].len());
+        let sources: Vec<usize> =
+            own[object as usize].iter().chain(borrowed.iter().flat_map(|l| &l.sources)).copied().collect();
+        for (p, _) in train::targets_read(scene, settings, object, samples).iter().enumerate().filter(|(_, &r)| r) {
+            read[sources[p]] = true;
+        }
+    }
+    read
+}
+
+/// Part of a tracing pass's cache key: which rays of each configuration it traces.
+fn selection_key<I: Iterator<Item = (usize, u32)>>(configurations: impl Iterator<Item = I>) -> Vec<u8> {
+    let mut key = Fnv64::default();
+    for rays in configurations {
+        for (target, ray) in rays {
+            key.write(&(target as u64).to_le_bytes());
+            key.write(&ray.to_le_bytes());
+        }
+        key.write(b";");
+    }
+    key.0.to_le_bytes().to_vec()
 }
 
 /// Trains (or reads back from the cache) the networks of a bake part's share of the jobs.
@@ -678,7 +767,7 @@ const AIMED_STREAM: u64 = 0xa1e5_0000_0000_0001;
 /// box that make up the difference, moved to the nearest point of its box, and what to
 /// report: its networks then learn the light of the surfaces around it, an approximation that
 /// never renders black. `None` if the whole bake has too few samples.
-fn borrow_samples(scene: &Scene, all: &[Sample], object: u32, min_samples: usize) -> Option<(Vec<Sample>, String)> {
+fn borrow_samples(scene: &Scene, all: &[Sample], object: u32, min_samples: usize) -> Option<Lent> {
     let own = all.iter().filter(|s| s.object == object).count();
     let wanted = min_samples - own;
     if all.len() - own < wanted {
@@ -702,16 +791,25 @@ fn borrow_samples(scene: &Scene, all: &[Sample], object: u32, min_samples: usize
          hardly visible from the camera box): its networks also learned the {wanted} samples nearest to it, on {}",
         sources.join(", ")
     );
-    let moved = others[..wanted]
+    let sources: Vec<usize> = others[..wanted].iter().map(|&(_, i)| i).collect();
+    let samples = sources
         .iter()
-        .map(|&(_, i)| {
+        .map(|&i| {
             let mut s = all[i];
             let moved = position(&s).clamp(min, max);
             s.inputs[..3].copy_from_slice(&moved.to_array());
             s
         })
         .collect();
-    Some((moved, reason))
+    Some(Lent { samples, sources, reason })
+}
+
+/// The samples an object borrows ([`borrow_samples`]): copies moved onto its box, the
+/// positions in the bake's samples of those they were copied from, and what to report.
+struct Lent {
+    samples: Vec<Sample>,
+    sources: Vec<usize>,
+    reason: String,
 }
 
 /// Whether `object` gets networks: every object but pure emitters, which show their emission,

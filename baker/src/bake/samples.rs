@@ -97,22 +97,38 @@ pub fn sample_configuration(
     trace: &TraceSettings,
     seed: u64,
 ) -> Vec<Sample> {
+    let rays = sample_rays(scene, geometry, config, aim, 0..rays, paths_per_sample, trace, seed);
+    rays.into_iter().map(|(_, sample)| sample).collect()
+}
+
+/// The samples along the rays numbered `rays` of those [`sample_configuration`] casts, each
+/// with its ray's number. A ray's sample is the same whichever other rays are cast with it.
+/// With `paths_per_sample` 0 a sample is only located: its object and inputs, with targets
+/// and noise 0.
+#[allow(clippy::too_many_arguments)]
+pub fn sample_rays(
+    scene: &Scene,
+    geometry: &Geometry,
+    config: &Configuration,
+    aim: Aim,
+    rays: impl Iterator<Item = u32>,
+    paths_per_sample: u32,
+    trace: &TraceSettings,
+    seed: u64,
+) -> Vec<(u32, Sample)> {
     let world = World::new(scene, geometry, Some(config.light));
-    (0..rays)
-        .filter_map(|ray| {
-            let mut rng = Rng::new(seed, u64::from(ray));
-            let (dir, only) = match aim {
-                Aim::Sphere => (uniform_sphere(rng.next_vec2()), None),
-                Aim::At(target) => {
-                    ((target.point(&mut rng)? - config.viewpoint).normalize_or_zero(), Some(target.object))
-                }
-            };
-            if dir == Vec3::ZERO {
-                return None;
-            }
-            sample_along(&world, config, dir, only, paths_per_sample, trace, seed, ray)
-        })
-        .collect()
+    rays.filter_map(|ray| {
+        let mut rng = Rng::new(seed, u64::from(ray));
+        let (dir, only) = match aim {
+            Aim::Sphere => (uniform_sphere(rng.next_vec2()), None),
+            Aim::At(target) => ((target.point(&mut rng)? - config.viewpoint).normalize_or_zero(), Some(target.object)),
+        };
+        if dir == Vec3::ZERO {
+            return None;
+        }
+        Some((ray, sample_along(&world, config, dir, only, paths_per_sample, trace, seed, ray)?))
+    })
+    .collect()
 }
 
 /// Points on an object's surface, drawn uniformly by area.

@@ -138,9 +138,7 @@ pub fn network_data(
     node: &Node,
     samples: &[&Sample],
 ) -> NetworkData {
-    let mut order: Vec<usize> = (0..samples.len()).collect();
-    Rng::new(settings.seed ^ node.stream(), 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
-    order.truncate(settings.max_samples_per_network);
+    let order = subset(settings, object, node.stream(), samples.len());
     let (input_min, input_max) = input_ranges(scene, object);
     let target = |s: &Sample| s.target(component);
     let rms = {
@@ -201,10 +199,7 @@ fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInf
         if near.iter().all(|&(_, w)| w == 1.0) {
             continue; // no sample in a band: the leaf's own fit is the blend's
         }
-        let mut order: Vec<usize> = (0..near.len()).collect();
-        let stream = Fnv64::of(leaves[i].1.region.path().as_bytes());
-        Rng::new(settings.seed ^ stream ^ BLEND_STREAM, 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
-        order.truncate(settings.max_samples_per_network);
+        let order = subset(settings, object, blend_stream(&leaves[i].1.region), near.len());
         let network = &leaves[i].0;
         let rms = network.output_scale;
         let validation_count = ((order.len() as f32 * settings.validation_fraction) as usize).max(1);
@@ -248,6 +243,56 @@ const BLEND_PATIENCE: u32 = 5;
 
 /// Separates the random streams of the blend fit's sample subsets from the leaves' own.
 const BLEND_STREAM: u64 = 0xb1e4_d000_0000_0001;
+
+/// The random stream of the blend fit's subset of the leaf over `region`.
+fn blend_stream(region: &Region) -> u64 {
+    Fnv64::of(region.path().as_bytes()) ^ BLEND_STREAM
+}
+
+/// The samples a network learns from, of the `count` it could: a deterministic random subset
+/// of at most `max_samples_per_network`, as positions in their list; `stream` tells the
+/// networks of one object apart.
+fn subset(settings: &BakeSettings, object: u32, stream: u64, count: usize) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..count).collect();
+    Rng::new(settings.seed ^ stream, 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
+    order.truncate(settings.max_samples_per_network);
+    order
+}
+
+/// Which of `object`'s `samples` (in [`train_tree`]'s order) any tree that [`train_tree`] can
+/// grow from them reads the targets of: the subsets of every node of the complete tree, down
+/// to the bake's split depth, and of the blend fit of every node that could be a leaf. Only
+/// the samples' positions decide it, so the bake traces paths for these samples alone.
+pub fn targets_read(scene: &Scene, settings: &BakeSettings, object: u32, samples: &[&Sample]) -> Vec<bool> {
+    let mut read = vec![false; samples.len()];
+    let bounds = scene.objects[object as usize].bounds();
+    let all: Vec<usize> = (0..samples.len()).collect();
+    let mut nodes = vec![(Node::root(scene, object), all)];
+    while let Some((node, within)) = nodes.pop() {
+        for i in subset(settings, object, node.stream(), within.len()) {
+            read[within[i]] = true;
+        }
+        if !node.region.is_whole() && settings.blend_band > 0.0 {
+            // `fit_blend`'s samples: those of the whole object inside the leaf's blend box.
+            let blend = node.region.blend_box(bounds.min, bounds.max, settings.blend_band);
+            let near: Vec<usize> = (0..samples.len()).filter(|&i| blend.weight(position(samples[i])) > 0.0).collect();
+            for i in subset(settings, object, blend_stream(&node.region), near.len()) {
+                read[near[i]] = true;
+            }
+        }
+        if (node.region.0.len() as u32) < settings.split_depth {
+            let halves = node.children().map(|child| {
+                let b = child.sample_box();
+                let inside: Vec<usize> = within.iter().copied().filter(|&i| b.contains(position(samples[i]))).collect();
+                (child, inside)
+            });
+            if halves.iter().all(|(_, inside)| inside.len() >= settings.min_samples) {
+                nodes.extend(halves);
+            }
+        }
+    }
+    read
+}
 
 /// What one tree learns: an object's component, in a bake of `scene` with `settings`.
 #[derive(Clone, Copy)]
@@ -477,6 +522,36 @@ mod tests {
     fn leaves(scene: &Scene, settings: &BakeSettings, object: u32, samples: &[Sample]) -> Vec<(Network, NetworkInfo)> {
         let refs: Vec<&Sample> = samples.iter().collect();
         train_tree(scene, settings, object, Component::Direct, &refs)
+    }
+
+    /// A tree trains to the same networks when the targets of the samples that
+    /// [`targets_read`] leaves out are NaN, which would poison any network that learned from
+    /// them: a depth-2 tree with blended leaves, on subsets of at most 300 of each node's samples.
+    #[test]
+    fn training_reads_no_target_but_those_selected() {
+        let (scene, wall) = back_wall();
+        let mut settings = settings(&scene);
+        settings.split_depth = 2;
+        settings.max_samples_per_network = 300;
+        settings.min_samples = 100;
+        let sigma = 0.05f32;
+        let full = samples_of(&scene, wall, 5000, sigma, 0.1 * sigma * sigma, |p, l| 0.3 + 0.5 * p.x * p.y + 0.2 * l.z);
+        let refs: Vec<&Sample> = full.iter().collect();
+        let read = targets_read(&scene, &settings, wall, &refs);
+        let unread = read.iter().filter(|&&r| !r).count();
+        assert!(unread > full.len() / 10, "only {unread} of {} samples left out", full.len());
+        let selected: Vec<Sample> = full
+            .iter()
+            .zip(&read)
+            .map(|(s, &read)| if read { *s } else { Sample { direct: [f32::NAN; 3], ..*s } })
+            .collect();
+        let want = leaves(&scene, &settings, wall, &full);
+        assert!(want.len() > 2, "the tree splits twice: {} leaves", want.len());
+        let got = leaves(&scene, &settings, wall, &selected);
+        assert_eq!(got.len(), want.len());
+        for ((g, gi), (w, wi)) in got.iter().zip(&want) {
+            assert_eq!((&g.params, gi), (&w.params, wi));
+        }
     }
 
     /// A node is split exactly when its network's error is above the noise its samples
