@@ -10,7 +10,7 @@ use std::path::Path;
 
 use rrf_baker::bake::lm::{self, initial_parameters, Dataset, LmSettings};
 use rrf_baker::bake::samples::{latin_hypercube, sample_configuration, Aim, Sample};
-use rrf_baker::bake::{network_data, BakeSettings, Node, Quality};
+use rrf_baker::bake::{network_data, BakeSettings, Quality};
 use rrf_baker::network::{normalize, Component};
 use rrf_baker::scene::Scene;
 use rrf_baker::trace::{Geometry, TraceSettings};
@@ -51,7 +51,7 @@ fn main() {
         settings.max_samples_per_network = usize::MAX;
         let mut errors = Vec::new();
         for component in Component::ALL {
-            let data = network_data(&scene, &settings, floor, component, &Node::root(&scene, floor), &refs);
+            let data = network_data(&scene, &settings, floor, component, &refs);
             let result = lm::train(
                 &data.train,
                 &data.validation,

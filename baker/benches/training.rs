@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use rrf_baker::bake::lm::{self, initial_parameters, Dataset, LmSettings};
 use rrf_baker::bake::samples::{latin_hypercube, sample_configuration, Aim};
-use rrf_baker::bake::{network_data, BakeSettings, Node, Quality};
+use rrf_baker::bake::{network_data, BakeSettings, Quality};
 use rrf_baker::network::{
     hidden_layers, Component, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3,
 };
@@ -123,7 +123,7 @@ fn main() {
         .filter(|s| s.object == floor)
         .collect();
     let refs: Vec<_> = samples.iter().collect();
-    let data = network_data(&scene, &final_, floor, Component::Direct, &Node::root(&scene, floor), &refs);
+    let data = network_data(&scene, &final_, floor, Component::Direct, &refs);
     println!(
         "Floor direct light: {} training and {} validation samples (32 paths each); MSE in units of the target RMS",
         data.train.len(),

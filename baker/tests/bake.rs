@@ -510,17 +510,19 @@ fn an_object_short_of_samples_borrows_its_neighbours() {
     assert!(note.reason.contains("BackWall"), "the back wall is nearest: {}", note.reason);
     let light = scene.moving_light.as_ref().unwrap().bounds;
     let light = (light.min + light.max) * 0.5;
-    for component in Component::ALL {
-        let leaves = model.networks("ShortBlock", component);
-        assert!(!leaves.is_empty(), "{component:?}");
-        let object = &scene.objects[short];
-        for (p, n) in object.positions.iter().zip(&object.normals) {
-            let raw = rrf_baker::network::raw_inputs(*p, rrf_baker::glam::Vec3::Z, light, *n, 0.5);
+    let object = &scene.objects[short];
+    for (p, n) in object.positions.iter().zip(&object.normals) {
+        let raw = rrf_baker::network::raw_inputs(*p, rrf_baker::glam::Vec3::Z, light, *n, 0.5);
+        let mut gi = rrf_baker::glam::Vec3::ZERO;
+        for component in Component::ALL {
+            let leaves = model.networks("ShortBlock", component);
+            assert!(!leaves.is_empty(), "{component:?}");
             let radiance = rrf_baker::network::evaluate_blended(&leaves, &raw);
             assert!(radiance.is_finite(), "{component:?} at {p}: {radiance}");
-            if n.z < -0.9 {
-                assert!(radiance.min_element() > 0.0, "{component:?} on the front at {p}: {radiance}");
-            }
+            gi += radiance;
+        }
+        if n.z < -0.9 {
+            assert!(gi.min_element() > 0.0, "the front at {p}: {gi}");
         }
     }
     let round_trip = Model::from_bytes(&model.to_bytes().unwrap()).unwrap();

@@ -13,7 +13,7 @@ use crate::model::NetworkInfo;
 use crate::network::{normalize, Component, Network, INPUTS, OUTPUTS, VIEW_INPUT, W3};
 use crate::partition::Region;
 use crate::scene::{Aabb, Scene};
-use crate::trace::sampling::{mix64, Rng};
+use crate::trace::sampling::mix64;
 
 /// Each half of a split learns from the samples in its box grown by this share of the box's
 /// size on every side, so that both networks that meet at a split plane learned the light
@@ -72,16 +72,6 @@ impl Node {
             max: Vec3::from_array(std::array::from_fn(|a| open(max[a], self.bounds.max[a] + grow[a], f32::INFINITY))),
         }
     }
-
-    /// Separates the random streams of nodes; 0 for the root, so that an object that is not
-    /// split trains as it did before trees existed.
-    fn stream(&self) -> u64 {
-        if self.region.is_whole() {
-            0
-        } else {
-            Fnv64::of(self.region.path().as_bytes())
-        }
-    }
 }
 
 /// Input ranges for `object`'s networks, every leaf's the same: its bounding box for positions,
@@ -128,29 +118,28 @@ pub struct NetworkData {
     pub validation_noise: f64,
 }
 
-/// A deterministic random subset of `samples` (those of `node`), split into training and
-/// validation sets.
+/// A deterministic random subset of `samples` (those of `node`, [`subset`]), split into
+/// training and validation sets ([`is_validation`]).
 pub fn network_data(
     scene: &Scene,
     settings: &BakeSettings,
     object: u32,
     component: Component,
-    node: &Node,
     samples: &[&Sample],
 ) -> NetworkData {
-    let order = subset(settings, object, node.stream(), samples.len());
+    let order = subset(settings, samples);
     let (input_min, input_max) = input_ranges(scene, object);
     let target = |s: &Sample| s.target(component);
     let rms = {
         let sum: f64 = order.iter().flat_map(|&i| target(samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
         ((sum / (order.len() * OUTPUTS) as f64).sqrt() as f32).max(1e-6)
     };
-    let validation_count = ((order.len() as f32 * settings.validation_fraction) as usize).max(1);
+    let validates = validation_flags(settings, order.iter().map(|&i| samples[i]));
     let (mut train, mut validation) = (Dataset::default(), Dataset::default());
     let mut noise = 0.0f64;
-    for (n, &i) in order.iter().enumerate() {
+    for (&i, &validates) in order.iter().zip(&validates) {
         let s = samples[i];
-        let set = if n < validation_count {
+        let set = if validates {
             noise += f64::from(s.noise(component));
             &mut validation
         } else {
@@ -191,7 +180,7 @@ pub fn train_tree(
 /// parameters with the lowest validation error of the blend, its starting ones included, and
 /// records that error.
 fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInfo)]) {
-    let Tree { settings, object, .. } = tree;
+    let Tree { settings, .. } = tree;
     for i in 0..leaves.len() {
         let own = leaves[i].0.blend;
         let near: Vec<(&Sample, f32)> =
@@ -199,15 +188,16 @@ fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInf
         if near.iter().all(|&(_, w)| w == 1.0) {
             continue; // no sample in a band: the leaf's own fit is the blend's
         }
-        let order = subset(settings, object, blend_stream(&leaves[i].1.region), near.len());
+        let near_samples: Vec<&Sample> = near.iter().map(|&(s, _)| s).collect();
+        let order = subset(settings, &near_samples);
+        let validates = validation_flags(settings, order.iter().map(|&k| near_samples[k]));
         let network = &leaves[i].0;
         let rms = network.output_scale;
-        let validation_count = ((order.len() as f32 * settings.validation_fraction) as usize).max(1);
         let (mut train, mut validation) = (Dataset::default(), Dataset::default());
         let mut noise = 0.0f64;
-        for (n, &k) in order.iter().enumerate() {
+        for (&k, &validates) in order.iter().zip(&validates) {
             let (s, weight) = near[k];
-            if n < validation_count {
+            if validates {
                 noise += f64::from(s.noise(tree.component));
             }
             let p = position(s);
@@ -220,7 +210,7 @@ fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInf
                 .map(|(w, other)| other.evaluate(&s.inputs) * w)
                 .sum();
             let rest = Vec3::from(s.target(tree.component)) - others;
-            let set = if n < validation_count { &mut validation } else { &mut train };
+            let set = if validates { &mut validation } else { &mut train };
             set.inputs
                 .push(std::array::from_fn(|k| normalize(s.inputs[k], network.input_min[k], network.input_max[k])));
             set.targets.push((rest / rms).to_array());
@@ -241,22 +231,39 @@ fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInf
 /// nothing).
 const BLEND_PATIENCE: u32 = 5;
 
-/// Separates the random streams of the blend fit's sample subsets from the leaves' own.
-const BLEND_STREAM: u64 = 0xb1e4_d000_0000_0001;
-
-/// The random stream of the blend fit's subset of the leaf over `region`.
-fn blend_stream(region: &Region) -> u64 {
-    Fnv64::of(region.path().as_bytes()) ^ BLEND_STREAM
+/// A sample's place in every subset's order: a hash of its object and inputs under the bake's
+/// seed. A node's subset is its samples with the lowest keys ([`subset`]), so a half's subset
+/// holds every sample of its parent's that lies inside it, and the nodes of one object
+/// together read not many more samples than those of its deepest level do.
+fn key(settings: &BakeSettings, s: &Sample) -> u64 {
+    let mut hash = Fnv64::default();
+    hash.write(&s.object.to_le_bytes());
+    s.inputs.iter().for_each(|v| hash.write(&v.to_le_bytes()));
+    mix64(hash.0 ^ settings.seed)
 }
 
-/// The samples a network learns from, of the `count` it could: a deterministic random subset
-/// of at most `max_samples_per_network`, as positions in their list; `stream` tells the
-/// networks of one object apart.
-fn subset(settings: &BakeSettings, object: u32, stream: u64, count: usize) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..count).collect();
-    Rng::new(settings.seed ^ stream, 0x5eed_0000 + u64::from(object)).shuffle(&mut order);
+/// The samples a network learns from: of `samples`, at most `max_samples_per_network` with
+/// the lowest [`key`]s, a deterministic random subset, as positions in `samples` in key order.
+fn subset(settings: &BakeSettings, samples: &[&Sample]) -> Vec<usize> {
+    let mut order: Vec<(u64, usize)> = samples.iter().enumerate().map(|(i, s)| (key(settings, s), i)).collect();
+    order.sort_unstable();
     order.truncate(settings.max_samples_per_network);
-    order
+    order.into_iter().map(|(_, i)| i).collect()
+}
+
+/// Which of a subset's `samples` validate rather than train: a `validation_fraction` of all
+/// samples, picked by the low bits of their [`key`], so that a sample validates in every
+/// network that holds it or in none, and no half validates on what its parent trained on. At
+/// least one does (the first).
+fn validation_flags<'a>(settings: &BakeSettings, samples: impl Iterator<Item = &'a Sample>) -> Vec<bool> {
+    let low_bits = |k: u64| (k & 0xff_ffff) as f32 / (1u32 << 24) as f32;
+    let mut flags: Vec<bool> = samples.map(|s| low_bits(key(settings, s)) < settings.validation_fraction).collect();
+    if !flags.contains(&true) {
+        if let Some(first) = flags.first_mut() {
+            *first = true;
+        }
+    }
+    flags
 }
 
 /// Which of `object`'s `samples` (in [`train_tree`]'s order) any tree that [`train_tree`] can
@@ -269,14 +276,16 @@ pub fn targets_read(scene: &Scene, settings: &BakeSettings, object: u32, samples
     let all: Vec<usize> = (0..samples.len()).collect();
     let mut nodes = vec![(Node::root(scene, object), all)];
     while let Some((node, within)) = nodes.pop() {
-        for i in subset(settings, object, node.stream(), within.len()) {
+        let node_samples: Vec<&Sample> = within.iter().map(|&i| samples[i]).collect();
+        for i in subset(settings, &node_samples) {
             read[within[i]] = true;
         }
         if !node.region.is_whole() && settings.blend_band > 0.0 {
             // `fit_blend`'s samples: those of the whole object inside the leaf's blend box.
             let blend = node.region.blend_box(bounds.min, bounds.max, settings.blend_band);
             let near: Vec<usize> = (0..samples.len()).filter(|&i| blend.weight(position(samples[i])) > 0.0).collect();
-            for i in subset(settings, object, blend_stream(&node.region), near.len()) {
+            let near_samples: Vec<&Sample> = near.iter().map(|&i| samples[i]).collect();
+            for i in subset(settings, &near_samples) {
                 read[near[i]] = true;
             }
         }
@@ -417,7 +426,7 @@ fn position(s: &Sample) -> Vec3 {
 /// elsewhere stays near the parent, which learned from all of the object's samples.
 fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&Network>) -> Trained {
     let Tree { scene, settings, object, component } = tree;
-    let data = network_data(scene, settings, object, component, node, samples);
+    let data = network_data(scene, settings, object, component, samples);
     let rms = data.output_scale;
     let initial = match parent {
         Some(parent) => {
@@ -463,6 +472,7 @@ mod tests {
     use super::*;
     use crate::bake::{BakeSettings, Quality};
     use crate::network::raw_inputs;
+    use crate::trace::sampling::Rng;
 
     /// The Cornell box and its back wall, a plane whose longest side (x) the first cut halves.
     fn back_wall() -> (Scene, u32) {
