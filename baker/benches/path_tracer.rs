@@ -3,12 +3,16 @@
 //! and on one.
 //!
 //! `cargo bench -p rrf-baker --bench path_tracer [-- --spp N]`
+//!
+//! The checksum (FNV-1a of every pixel's components) tells whether a change to the
+//! tracer that should only make it faster left its output as it was, to the bit.
 
 use std::path::Path;
 use std::time::Instant;
 
+use rrf_baker::hash::Fnv64;
 use rrf_baker::scene::Scene;
-use rrf_baker::trace::{render, Camera, Footprint, Geometry, RenderSettings, TraceSettings, World};
+use rrf_baker::trace::{render, Camera, Footprint, Geometry, RadianceImage, RenderSettings, TraceSettings, World};
 
 fn main() {
     let spp = std::env::args().skip_while(|a| a != "--spp").nth(1).and_then(|s| s.parse().ok()).unwrap_or(256u32);
@@ -37,11 +41,20 @@ fn main() {
         let seconds = start.elapsed().as_secs_f64();
         let mean = image.pixels.iter().map(|r| r.gi()).sum::<rrf_baker::glam::Vec3>() / image.pixels.len() as f32;
         println!(
-            "{threads} thread(s): {seconds:.2} s, {:.2} M paths/s (image mean {:.4} {:.4} {:.4})",
+            "{threads} thread(s): {seconds:.2} s, {:.2} M paths/s (image mean {:.4} {:.4} {:.4}, checksum {:016x})",
             paths / seconds / 1e6,
             mean.x,
             mean.y,
-            mean.z
+            mean.z,
+            checksum(&image)
         );
     }
+}
+
+fn checksum(image: &RadianceImage) -> u64 {
+    let mut hash = Fnv64::default();
+    for value in image.pixels.iter().flat_map(|r| [r.emitted, r.direct, r.indirect]).flat_map(|v| v.to_array()) {
+        hash.write(&value.to_le_bytes());
+    }
+    hash.0
 }

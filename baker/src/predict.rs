@@ -104,7 +104,7 @@ impl Predictor<'_> {
             Direct::Learned => eval(&self.networks.direct[object]),
             Direct::Analytic => {
                 let frame = Frame::new(si.shading_normal);
-                point_lights_at(world, &si, &frame, frame.to_local(-dir))
+                point_lights_at(world, &si, &frame, &si.bsdf.seen_from(frame.to_local(-dir)))
             }
         };
         Radiance { emitted: si.emission, direct, indirect: eval(&self.networks.indirect[object]) }

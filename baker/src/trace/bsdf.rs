@@ -77,31 +77,27 @@ impl Bsdf {
         0.5 * ((1.0 + self.alpha * self.alpha * tan2).sqrt() - 1.0)
     }
 
-    fn g1(&self, w: Vec3) -> f32 {
-        1.0 / (1.0 + self.lambda(w))
-    }
-
-    /// Height-correlated masking-shadowing.
-    fn g2(&self, wo: Vec3, wi: Vec3) -> f32 {
-        1.0 / (1.0 + self.lambda(wo) + self.lambda(wi))
+    /// The BSDF seen from `wo`, for evaluating and sampling directions from it.
+    pub fn seen_from(&self, wo: Vec3) -> SeenFrom {
+        let specular_probability = self.specular_probability(wo);
+        // A Lambert surface never samples GGX, unless it is black (see `eval_pdf`).
+        let lambda_wo = if self.is_lambert() && specular_probability == 0.0 { 0.0 } else { self.lambda(wo) };
+        SeenFrom { bsdf: *self, wo, specular_probability, lambda_wo }
     }
 
     /// `f(wo, wi)`; zero unless both are above the surface.
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Vec3::ZERO;
-        }
-        if self.is_lambert() {
-            return self.base_color * FRAC_1_PI;
-        }
-        let h = (wo + wi).normalize();
-        let vh = wo.dot(h).max(0.0);
-        let f_d = self.specular * schlick(Vec3::splat(0.04), vh).x;
-        let f_m = schlick(self.base_color, vh);
-        let diffuse = (1.0 - self.metallic) * (1.0 - f_d) * self.base_color * FRAC_1_PI;
-        let fresnel = (1.0 - self.metallic) * Vec3::splat(f_d) + self.metallic * f_m;
-        let spec = fresnel * (self.d(h) * self.g2(wo, wi) / (4.0 * wo.z * wi.z));
-        diffuse + spec
+        self.seen_from(wo).eval_pdf(wi).0
+    }
+
+    /// Density of [`Bsdf::sample`] producing `wi`, in solid angle.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.seen_from(wo).eval_pdf(wi).1
+    }
+
+    /// Samples `wi` from `wo` with `u_lobe` choosing the lobe and `u` the direction.
+    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        self.seen_from(wo).sample(u_lobe, u)
     }
 
     /// Probability of sampling the specular lobe, from the lobes' weights seen from `wo`.
@@ -119,43 +115,6 @@ impl Bsdf {
         }
     }
 
-    /// Density of `wi` under GGX visible-normal sampling from `wo`.
-    fn vndf_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let h = (wo + wi).normalize();
-        self.g1(wo) * self.d(h) / (4.0 * wo.z)
-    }
-
-    /// Density of [`Bsdf::sample`] producing `wi`, in solid angle.
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return 0.0;
-        }
-        let p = self.specular_probability(wo);
-        let spec = if p > 0.0 { p * self.vndf_pdf(wo, wi) } else { 0.0 };
-        spec + (1.0 - p) * wi.z * FRAC_1_PI
-    }
-
-    /// Samples `wi` from `wo` with `u_lobe` choosing the lobe and `u` the direction.
-    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        let wi = if u_lobe < self.specular_probability(wo) {
-            let h = self.sample_visible_normal(wo, u);
-            2.0 * wo.dot(h) * h - wo
-        } else {
-            cosine_hemisphere(u)
-        };
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let pdf = self.pdf(wo, wi);
-        if pdf <= 0.0 || !pdf.is_finite() {
-            return None;
-        }
-        Some(BsdfSample { wi, weight: self.eval(wo, wi) * (wi.z / pdf), pdf })
-    }
-
     /// A microfacet normal from the distribution of normals visible from `wo` (Heitz 2018).
     fn sample_visible_normal(&self, wo: Vec3, u: Vec2) -> Vec3 {
         let a = self.alpha;
@@ -170,5 +129,77 @@ impl Bsdf {
         let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
         let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
         Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-7)).normalize()
+    }
+}
+
+/// A BSDF seen from one direction `wo` (a path vertex's): what depends on `wo` alone, the
+/// lobe probability and Smith's Λ(wo), is computed once for every direction the vertex
+/// evaluates, and a direction's value and density share its half vector and D.
+#[derive(Clone, Copy, Debug)]
+pub struct SeenFrom {
+    bsdf: Bsdf,
+    wo: Vec3,
+    specular_probability: f32,
+    lambda_wo: f32,
+}
+
+impl SeenFrom {
+    /// `f(wo, wi)` and the density of [`SeenFrom::sample`] producing `wi` (solid angle); both
+    /// zero unless `wo` and `wi` are above the surface.
+    pub fn eval_pdf(&self, wi: Vec3) -> (Vec3, f32) {
+        let (b, wo) = (&self.bsdf, self.wo);
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let p = self.specular_probability;
+        let (f, specular_pdf) = if b.is_lambert() && p == 0.0 {
+            (b.base_color * FRAC_1_PI, 0.0)
+        } else {
+            let h = (wo + wi).normalize();
+            let d = b.d(h);
+            let f = if b.is_lambert() {
+                b.base_color * FRAC_1_PI
+            } else {
+                let vh = wo.dot(h).max(0.0);
+                let f_d = b.specular * schlick(Vec3::splat(0.04), vh).x;
+                let f_m = schlick(b.base_color, vh);
+                let diffuse = (1.0 - b.metallic) * (1.0 - f_d) * b.base_color * FRAC_1_PI;
+                let fresnel = (1.0 - b.metallic) * Vec3::splat(f_d) + b.metallic * f_m;
+                // Height-correlated masking-shadowing G₂.
+                let g2 = 1.0 / (1.0 + self.lambda_wo + b.lambda(wi));
+                diffuse + fresnel * (d * g2 / (4.0 * wo.z * wi.z))
+            };
+            // GGX visible-normal sampling's density: G₁(wo) D(h) / (4 cos θo).
+            let vndf = 1.0 / (1.0 + self.lambda_wo) * d / (4.0 * wo.z);
+            (f, if p > 0.0 { p * vndf } else { 0.0 })
+        };
+        (f, specular_pdf + (1.0 - p) * wi.z * FRAC_1_PI)
+    }
+
+    /// `f(wo, wi)`; zero unless both are above the surface.
+    pub fn eval(&self, wi: Vec3) -> Vec3 {
+        self.eval_pdf(wi).0
+    }
+
+    /// Samples `wi` with `u_lobe` choosing the lobe and `u` the direction.
+    pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let wo = self.wo;
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let wi = if u_lobe < self.specular_probability {
+            let h = self.bsdf.sample_visible_normal(wo, u);
+            2.0 * wo.dot(h) * h - wo
+        } else {
+            cosine_hemisphere(u)
+        };
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let (f, pdf) = self.eval_pdf(wi);
+        if pdf <= 0.0 || !pdf.is_finite() {
+            return None;
+        }
+        Some(BsdfSample { wi, weight: f * (wi.z / pdf), pdf })
     }
 }

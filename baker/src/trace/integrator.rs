@@ -15,6 +15,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use glam::Vec3;
 
+use super::bsdf::SeenFrom;
 use super::sampling::{Frame, Rng};
 use super::stratified::VertexSamples;
 use super::world::{Interaction, World};
@@ -98,11 +99,11 @@ pub fn offset_origin(si: &Interaction, dir: Vec3) -> Vec3 {
     si.position + si.geometric_normal * (eps * side)
 }
 
-/// The light of the world's point lights that leaves `si` towards `wo_local` (in `frame`, the
-/// shading frame) after one bounce: next-event estimation of every point light, which has no
-/// noise (a delta), with a shadow ray each. The analytic direct light of
-/// `predict::predict_image` is this at the primary hit.
-pub fn point_lights_at(world: &World, si: &Interaction, frame: &Frame, wo_local: Vec3) -> Vec3 {
+/// The light of the world's point lights that leaves `si` towards the direction `bsdf` is
+/// seen from (`si`'s BSDF, in `frame`, the shading frame) after one bounce: next-event
+/// estimation of every point light, which has no noise (a delta), with a shadow ray each. The
+/// analytic direct light of `predict::predict_image` is this at the primary hit.
+pub fn point_lights_at(world: &World, si: &Interaction, frame: &Frame, bsdf: &SeenFrom) -> Vec3 {
     let mut sum = Vec3::ZERO;
     for light in &world.point_lights {
         let to_light = light.position - si.position;
@@ -114,7 +115,7 @@ pub fn point_lights_at(world: &World, si: &Interaction, frame: &Frame, wo_local:
             continue;
         }
         let wi = frame.to_local(direction);
-        let f = si.bsdf.eval(wo_local, wi);
+        let f = bsdf.eval(wi);
         if f == Vec3::ZERO {
             continue;
         }
@@ -164,28 +165,29 @@ pub fn radiance_leaving(
         if wo_local.z <= 0.0 {
             break;
         }
+        let bsdf = si.bsdf.seen_from(wo_local);
 
         // Next-event estimation: a path one segment longer.
         if world.has_area_lights() {
             let (pick, u) = given.map_or_else(|| (rng.next_f32(), rng.next_vec2()), |v| (v.light_pick, v.light));
             if let Some(light) = world.sample_area_light(si.position, pick, u) {
                 let wi = frame.to_local(light.direction);
-                let f = si.bsdf.eval(wo_local, wi);
+                let (f, bsdf_pdf) = bsdf.eval_pdf(wi);
                 if f != Vec3::ZERO && light.direction.dot(si.geometric_normal) > 0.0 {
                     let origin = offset_origin(si, light.direction);
                     if !world.occluded(origin, light.direction, light.distance * (1.0 - 1e-3)) {
                         let pdf = light.pdf.unwrap_or(1.0);
-                        let weight = power_heuristic(pdf, si.bsdf.pdf(wo_local, wi));
+                        let weight = power_heuristic(pdf, bsdf_pdf);
                         out.add(segments + 1, beta * f * light.radiance * (wi.z * weight / pdf));
                     }
                 }
             }
         }
-        out.add(segments + 1, beta * point_lights_at(world, si, &frame, wo_local));
+        out.add(segments + 1, beta * point_lights_at(world, si, &frame, &bsdf));
 
         // Continue the path by sampling the BSDF.
         let (lobe, u) = given.map_or_else(|| (rng.next_f32(), rng.next_vec2()), |v| (v.lobe, v.direction));
-        let Some(sample) = si.bsdf.sample(wo_local, lobe, u) else {
+        let Some(sample) = bsdf.sample(lobe, u) else {
             break;
         };
         let wi = frame.to_world(sample.wi);
