@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use crate::network::{raw_inputs, reflectance, Component, INPUTS};
 use crate::scene::{Aabb, Scene};
-use crate::trace::integrator::radiance_leaving;
+use crate::trace::integrator::{radiance_leaving, FirstVertex};
 use crate::trace::sampling::{mix64, uniform_sphere, Rng};
 use crate::trace::stratified::stratified_vertex_samples;
 use crate::trace::{Geometry, Radiance, TraceSettings, World};
@@ -203,10 +203,11 @@ fn sample_along(
         .map(|g| stratified_vertex_samples((paths as usize + groups - 1 - g) / groups, &mut strata_rng))
         .collect();
     let mut sums = vec![Radiance::default(); groups];
+    let vertex = FirstVertex::new(world, &si, -dir, trace);
     for path in 0..paths as usize {
         let mut path_rng = Rng::new(stream, path as u64);
         let first = &strata[path % groups][path / groups];
-        sums[path % groups] += radiance_leaving(world, &si, -dir, Some(first), trace, &mut path_rng);
+        sums[path % groups] += radiance_leaving(world, &vertex, Some(first), trace, &mut path_rng);
     }
     let mut total = Radiance::default();
     sums.iter().for_each(|&group| total += group);
@@ -339,8 +340,9 @@ mod tests {
             }
             let si = world.interaction(config.viewpoint, dir, world.intersect(config.viewpoint, dir).unwrap());
             let r = reflectance(si.bsdf.base_color, si.bsdf.metallic, si.bsdf.specular);
+            let vertex = FirstVertex::new(&world, &si, -dir, &trace);
             let independent: Vec<Radiance> = (0..SEEDS * u64::from(PATHS))
-                .map(|p| radiance_leaving(&world, &si, -dir, None, &trace, &mut Rng::new(0x1d ^ u64::from(ray), p)))
+                .map(|p| radiance_leaving(&world, &vertex, None, &trace, &mut Rng::new(0x1d ^ u64::from(ray), p)))
                 .collect();
             out.push(Component::ALL.map(|c| {
                 let n = SEEDS as f64;

@@ -181,6 +181,11 @@ impl SeenFrom {
         self.eval_pdf(wi).0
     }
 
+    /// The direction it is seen from, in the shading frame.
+    pub fn wo(&self) -> Vec3 {
+        self.wo
+    }
+
     /// Samples `wi` with `u_lobe` choosing the lobe and `u` the direction.
     pub fn sample(&self, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let wo = self.wo;

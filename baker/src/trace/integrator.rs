@@ -132,40 +132,71 @@ pub fn trace_ray(world: &World, origin: Vec3, dir: Vec3, settings: &TraceSetting
     match world.intersect(origin, dir) {
         Some(hit) => {
             let si = world.interaction(origin, dir, hit);
-            radiance_leaving(world, &si, -dir, None, settings, rng)
+            radiance_leaving(world, &FirstVertex::new(world, &si, -dir, settings), None, settings, rng)
         }
         None => Radiance::default(),
     }
 }
 
-/// One path-traced estimate of the radiance leaving `first` towards `wo` (unit, pointing
-/// away from the surface). The path's decisions at `first` take `first_samples` where given
-/// (a stratified set's, [`super::stratified`]), and every other one numbers from `rng`.
+/// A path vertex's shading frame and its BSDF seen from the direction the path leaves it in.
+#[derive(Clone, Copy)]
+struct Vertex {
+    frame: Frame,
+    bsdf: SeenFrom,
+}
+
+impl Vertex {
+    fn new(si: &Interaction, wo: Vec3) -> Self {
+        let frame = Frame::new(si.shading_normal);
+        Vertex { frame, bsdf: si.bsdf.seen_from(frame.to_local(wo)) }
+    }
+}
+
+/// The first surface point of paths that leave it towards `wo` (unit, pointing away from the
+/// surface), with what all of them share: its [`Vertex`] and the light its point lights send
+/// towards `wo`, which has no noise. A bake's sample traces hundreds of paths from one point;
+/// each would otherwise trace the same shadow rays to the point lights.
+pub struct FirstVertex<'a> {
+    si: &'a Interaction,
+    vertex: Vertex,
+    /// `None` where no path from here reaches a second segment.
+    point_lights: Option<Vec3>,
+}
+
+impl<'a> FirstVertex<'a> {
+    pub fn new(world: &World, si: &'a Interaction, wo: Vec3, settings: &TraceSettings) -> Self {
+        let vertex = Vertex::new(si, wo);
+        let leaves = settings.max_depth > 1 && vertex.bsdf.wo().z > 0.0;
+        let point_lights = leaves.then(|| point_lights_at(world, si, &vertex.frame, &vertex.bsdf));
+        FirstVertex { si, vertex, point_lights }
+    }
+}
+
+/// One path-traced estimate of the radiance leaving `first` towards its `wo`. The path's
+/// decisions at `first` take `first_samples` where given (a stratified set's,
+/// [`super::stratified`]), and every other one numbers from `rng`.
 pub fn radiance_leaving(
     world: &World,
-    first: &Interaction,
-    wo: Vec3,
+    first: &FirstVertex,
     first_samples: Option<&VertexSamples>,
     settings: &TraceSettings,
     rng: &mut Rng,
 ) -> Radiance {
     let mut out = Radiance::default();
     if settings.max_depth >= 1 {
-        out.emitted = first.emission;
+        out.emitted = first.si.emission;
     }
     let mut beta = Vec3::ONE;
-    let mut wo = wo;
     let mut segments = 1;
+    let mut vertex = first.vertex;
     let mut current: Option<Interaction> = None;
     while segments < settings.max_depth {
-        let si = current.as_ref().unwrap_or(first);
+        let si = current.as_ref().unwrap_or(first.si);
         let given = if current.is_none() { first_samples } else { None };
-        let frame = Frame::new(si.shading_normal);
-        let wo_local = frame.to_local(wo);
-        if wo_local.z <= 0.0 {
+        let Vertex { frame, bsdf } = vertex;
+        if bsdf.wo().z <= 0.0 {
             break;
         }
-        let bsdf = si.bsdf.seen_from(wo_local);
 
         // Next-event estimation: a path one segment longer.
         if world.has_area_lights() {
@@ -183,7 +214,11 @@ pub fn radiance_leaving(
                 }
             }
         }
-        out.add(segments + 1, beta * point_lights_at(world, si, &frame, &bsdf));
+        let point_lights = match (&current, first.point_lights) {
+            (None, Some(shared)) => shared,
+            _ => point_lights_at(world, si, &frame, &bsdf),
+        };
+        out.add(segments + 1, beta * point_lights);
 
         // Continue the path by sampling the BSDF.
         let (lobe, u) = given.map_or_else(|| (rng.next_f32(), rng.next_vec2()), |v| (v.lobe, v.direction));
@@ -214,8 +249,8 @@ pub fn radiance_leaving(
                 beta /= survive;
             }
         }
+        vertex = Vertex::new(&next, -wi);
         current = Some(next);
-        wo = -wi;
     }
     out
 }
