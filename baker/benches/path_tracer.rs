@@ -1,8 +1,9 @@
 //! Path tracer throughput on the Cornell box: 256×256, 256 spp, max depth 8, Russian roulette
 //! from depth 5 (the settings of the Mitsuba 3 comparison in shared/FACTS.md), on all cores
-//! and on one.
+//! and on one. `--scene` names another of `scenes/` (its first view, its light where the glTF
+//! puts it).
 //!
-//! `cargo bench -p rrf-baker --bench path_tracer [-- --spp N]`
+//! `cargo bench -p rrf-baker --bench path_tracer [-- --spp N] [--scene NAME]`
 //!
 //! The checksum (FNV-1a of every pixel's components) tells whether a change to the
 //! tracer that should only make it faster left its output as it was, to the bit.
@@ -15,9 +16,11 @@ use rrf_baker::scene::Scene;
 use rrf_baker::trace::{render, Camera, Footprint, Geometry, RadianceImage, RenderSettings, TraceSettings, World};
 
 fn main() {
-    let spp = std::env::args().skip_while(|a| a != "--spp").nth(1).and_then(|s| s.parse().ok()).unwrap_or(256u32);
-    let scene = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/cornell-box"))
-        .expect("scenes/cornell-box loads");
+    let option = |name: &str| std::env::args().skip_while(|a| a != name).nth(1);
+    let spp = option("--spp").and_then(|s| s.parse().ok()).unwrap_or(256u32);
+    let name = option("--scene").unwrap_or_else(|| "cornell-box".into());
+    let scene = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(&name))
+        .unwrap_or_else(|e| panic!("scenes/{name} does not load: {e}"));
     let start = Instant::now();
     let geometry = Geometry::new(&scene);
     let bvh_ms = start.elapsed().as_secs_f64() * 1e3;
@@ -32,7 +35,7 @@ fn main() {
         footprint: Footprint::Area,
     };
     let paths = 256.0 * 256.0 * f64::from(spp);
-    println!("cornell-box 256x256, {spp} spp, max depth 8, roulette from 5; BVH build {bvh_ms:.2} ms");
+    println!("{name} 256x256, {spp} spp, max depth 8, roulette from 5; BVH build {bvh_ms:.2} ms");
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     for threads in [cores, 1] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
