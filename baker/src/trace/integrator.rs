@@ -188,12 +188,14 @@ pub fn radiance_leaving(
     }
     let mut beta = Vec3::ONE;
     let mut segments = 1;
-    let mut vertex = first.vertex;
-    let mut current: Option<Interaction> = None;
+    // The vertex the path has reached, and the direction it leaves it in; `None` at `first`.
+    let mut current: Option<(Interaction, Vec3)> = None;
     while segments < settings.max_depth {
-        let si = current.as_ref().unwrap_or(first.si);
+        let (si, Vertex { frame, bsdf }) = match &current {
+            None => (first.si, first.vertex),
+            Some((si, wo)) => (si, Vertex::new(si, *wo)),
+        };
         let given = if current.is_none() { first_samples } else { None };
-        let Vertex { frame, bsdf } = vertex;
         if bsdf.wo().z <= 0.0 {
             break;
         }
@@ -249,8 +251,7 @@ pub fn radiance_leaving(
                 beta /= survive;
             }
         }
-        vertex = Vertex::new(&next, -wi);
-        current = Some(next);
+        current = Some((next, -wi));
     }
     out
 }
