@@ -6,7 +6,6 @@ use anyhow::{bail, Result};
 use rrf_baker::bake::samples::latin_hypercube;
 use rrf_baker::glam::Vec3;
 use rrf_baker::scene::{Scene, View};
-use rrf_baker::trace::geometry::MovedTriangles;
 use rrf_baker::trace::sampling::{mix64, Rng};
 use rrf_baker::trace::Geometry;
 
@@ -61,7 +60,7 @@ pub fn held_out(scene: &Scene, geometry: &Geometry, random: usize, seed: u64) ->
             let solid = |_| true;
             let deep = dir != Vec3::ZERO
                 && geometry
-                    .intersect(eye, dir, f32::INFINITY, &MovedTriangles::default(), &solid)
+                    .intersect(eye, dir, f32::INFINITY, &[], &solid)
                     .is_none_or(|hit| hit.t >= MIN_DEPTH * diagonal);
             if deep {
                 target = candidate;

@@ -7,7 +7,10 @@
 //! triangles); [`Bvh8::new`] pulls the levels below each node up into it until it has eight
 //! children, and packs each leaf's triangles into one [`Triangles8`]. The triangle test is
 //! obvhs's `RtTriangle::intersect` (Möller–Trumbore) done eight lanes at a time, operation for
-//! operation, so a hit's distance is the same to the bit.
+//! operation, so a hit's distance is the same to the bit. Whether a ray that grazes an edge
+//! hits can differ: where the build has FMA, glam fuses one product of the cross product in
+//! `RtTriangle::intersect` and these lanes do not, which moves a barycentric by about 1e-8.
+//! (The moving light's few triangles keep obvhs's own test, so bakes are unchanged by that.)
 
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
@@ -104,22 +107,6 @@ impl Node {
 }
 
 impl Triangles8 {
-    /// Records in `best` this leaf's hits closer than `walk.tmax` that `accept` takes, lane by
-    /// lane, lowering `walk.tmax` to each.
-    #[inline(always)]
-    fn closest(&self, walk: &mut Walk, accept: &mut impl FnMut(u32, f32) -> bool, best: &mut Option<(u32, f32)>) {
-        let (t, mut hits) = self.hits(&walk.lanes, walk.tmin, walk.tmax);
-        while hits != 0 {
-            let lane = hits.trailing_zeros() as usize;
-            hits &= hits - 1;
-            let (primitive, t) = (self.primitives[lane], t[lane]);
-            if t < walk.tmax && accept(primitive, t) {
-                *best = Some((primitive, t));
-                walk.tmax = t;
-            }
-        }
-    }
-
     /// Each lane's hit distance, and the mask of the lanes hit within `[tmin, tmax]`.
     #[inline(always)]
     fn hits(&self, ray: &Lanes, tmin: f32, tmax: f32) -> ([f32; WIDTH], u32) {
@@ -243,7 +230,16 @@ impl Bvh8 {
     pub fn closest(&self, ray: &Ray, mut accept: impl FnMut(u32, f32) -> bool) -> Option<(u32, f32)> {
         let mut best = None;
         self.walk(ray, |walk, leaf| {
-            leaf.closest(walk, &mut accept, &mut best);
+            let (t, mut hits) = leaf.hits(&walk.lanes, walk.tmin, walk.tmax);
+            while hits != 0 {
+                let lane = hits.trailing_zeros() as usize;
+                hits &= hits - 1;
+                let (primitive, t) = (leaf.primitives[lane], t[lane]);
+                if t < walk.tmax && accept(primitive, t) {
+                    best = Some((primitive, t));
+                    walk.tmax = t;
+                }
+            }
             false
         });
         best
@@ -326,34 +322,6 @@ struct Walk {
     lanes: Lanes,
     tmin: f32,
     tmax: f32,
-}
-
-/// A few triangles tested eight at a time, without a tree: the moving light's, which move
-/// with every configuration.
-#[derive(Default)]
-pub struct TriangleSet {
-    packs: Vec<Triangles8>,
-}
-
-impl TriangleSet {
-    /// Hits name a triangle by its index in `triangles`.
-    pub fn new(triangles: &[Triangle]) -> Self {
-        let indices: Vec<u32> = (0..triangles.len() as u32).collect();
-        TriangleSet { packs: indices.chunks(WIDTH).map(|chunk| pack(triangles, chunk)).collect() }
-    }
-
-    /// As [`Bvh8::closest`]: of equally close hits, the triangle listed first wins.
-    #[inline(always)]
-    pub fn closest(&self, ray: &Ray, mut accept: impl FnMut(u32, f32) -> bool) -> Option<(u32, f32)> {
-        let mut best = None;
-        if !self.packs.is_empty() {
-            let mut walk = Walk { lanes: Lanes::new(ray), tmin: ray.tmin, tmax: ray.tmax };
-            for pack in &self.packs {
-                pack.closest(&mut walk, &mut accept, &mut best);
-            }
-        }
-        best
-    }
 }
 
 /// `primitives` (one to eight) as one SIMD leaf.

@@ -5,9 +5,10 @@
 
 use glam::{Vec2, Vec3, Vec3A, Vec4};
 use obvhs::ray::Ray;
+use obvhs::rt_triangle::RtTriangle;
 use obvhs::triangle::Triangle;
 
-use super::bvh8::{Bvh8, TriangleSet};
+use super::bvh8::Bvh8;
 
 use crate::scene::{AlphaMode, LightKind, Mirror, Scene};
 
@@ -52,18 +53,18 @@ pub type Covers<'a> = &'a dyn Fn(Hit) -> bool;
 pub struct Hit {
     pub t: f32,
     pub triangle: u32,
-    /// Which copy of the moving light a moving triangle belongs to (see [`MovedTriangles`]);
+    /// Which copy of the moving light a moving triangle belongs to (see [`MovedTriangle`]);
     /// 0 for every other triangle.
     pub copy: u32,
 }
 
-/// The moving area light's triangles where a configuration's lights put them: one copy of
-/// the light's triangles per light. The default has none: the static geometry alone.
-#[derive(Default)]
-pub struct MovedTriangles {
-    placed: TriangleSet,
-    /// Each placed triangle's id and copy, in the order of `placed`.
-    ids: Vec<(u32, u32)>,
+/// A triangle of the moving area light where one copy of the light puts it. A configuration
+/// with several lights holds one copy of the light's triangles per light.
+#[derive(Clone, Copy)]
+pub struct MovedTriangle {
+    pub triangle: u32,
+    pub copy: u32,
+    pub placed: RtTriangle,
 }
 
 impl Geometry {
@@ -131,32 +132,25 @@ impl Geometry {
 
     /// The moving light's triangles, one copy per light, each light `offsets[copy]` from the
     /// light's default position.
-    pub fn moved_triangles(&self, offsets: &[Vec3]) -> MovedTriangles {
-        let ids: Vec<(u32, u32)> = (0..offsets.len() as u32)
-            .flat_map(|copy| self.moving.iter().map(move |&triangle| (triangle, copy)))
-            .collect();
-        let placed: Vec<Triangle> = ids
-            .iter()
-            .map(|&(triangle, copy)| {
-                let [a, b, c] = self.corners(triangle, offsets[copy as usize]);
-                Triangle { v0: a.into(), v1: b.into(), v2: c.into() }
+    pub fn moved_triangles(&self, offsets: &[Vec3]) -> Vec<MovedTriangle> {
+        (0..offsets.len() as u32)
+            .flat_map(|copy| {
+                self.moving.iter().map(move |&triangle| {
+                    let [a, b, c] = self.corners(triangle, offsets[copy as usize]);
+                    MovedTriangle { triangle, copy, placed: RtTriangle::new(a.into(), b.into(), c.into()) }
+                })
             })
-            .collect();
-        MovedTriangles { placed: TriangleSet::new(&placed), ids }
+            .collect()
     }
 
-    /// The closest hit in `[0, ray.tmax)` among the moved triangles; a masked triangle is hit
-    /// only where `covers` says so.
-    fn closest_moved(&self, ray: &Ray, moved: &MovedTriangles, covers: Covers) -> Option<Hit> {
-        let hit = |i: u32, t: f32| {
-            let (triangle, copy) = moved.ids[i as usize];
-            Hit { t, triangle, copy }
-        };
-        let accept = |i: u32, t: f32| {
-            let hit = hit(i, t);
-            !self.triangles[hit.triangle as usize].masked || covers(hit)
-        };
-        moved.placed.closest(ray, accept).map(|(i, t)| hit(i, t))
+    /// `hit.t` if the ray meets the triangle there (it is finite) and, for a masked triangle,
+    /// `covers(hit)` says the surface is there; else infinity.
+    fn test(&self, hit: Hit, covers: Covers) -> f32 {
+        if hit.t < f32::INFINITY && self.triangles[hit.triangle as usize].masked && !covers(hit) {
+            f32::INFINITY
+        } else {
+            hit.t
+        }
     }
 
     /// Whether the BVH's hit of its primitive `i` at `t` counts: the alpha test of a masked
@@ -168,22 +162,40 @@ impl Geometry {
 
     /// Closest hit in `[0, tmax]` against the BVH and the moved light triangles; a masked
     /// triangle is hit only where `covers` says so (see [`Covers`]).
-    pub fn intersect(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &MovedTriangles, covers: Covers) -> Option<Hit> {
+    pub fn intersect(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        tmax: f32,
+        moved: &[MovedTriangle],
+        covers: Covers,
+    ) -> Option<Hit> {
         let mut ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
-        let best = self.bvh.closest(&ray, |i, t| self.accept_static(i, t, covers)).map(|(i, t)| Hit {
+        let mut best = self.bvh.closest(&ray, |i, t| self.accept_static(i, t, covers)).map(|(i, t)| Hit {
             t,
             triangle: self.bvh_ids[i as usize],
             copy: 0,
         });
-        // A moved triangle wins only if strictly closer: the BVH's hit wins a tie.
-        ray.tmax = best.map_or(tmax, |h| h.t);
-        self.closest_moved(&ray, moved, covers).or(best)
+        for m in moved {
+            ray.tmax = best.map_or(tmax, |h| h.t);
+            let candidate = Hit { t: m.placed.intersect(&ray), triangle: m.triangle, copy: m.copy };
+            if self.test(candidate, covers) < ray.tmax {
+                best = Some(candidate);
+            }
+        }
+        best
     }
 
     /// Whether anything lies between `origin` and `origin + dir · tmax`.
-    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &MovedTriangles, covers: Covers) -> bool {
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmax: f32, moved: &[MovedTriangle], covers: Covers) -> bool {
         let ray = Ray::new(Vec3A::from(origin), Vec3A::from(dir), 0.0, tmax);
-        self.bvh.any(&ray, |i, t| self.accept_static(i, t, covers)) || self.closest_moved(&ray, moved, covers).is_some()
+        if self.bvh.any(&ray, |i, t| self.accept_static(i, t, covers)) {
+            return true;
+        }
+        moved.iter().any(|m| {
+            let hit = Hit { t: m.placed.intersect(&ray), triangle: m.triangle, copy: m.copy };
+            self.test(hit, covers) < tmax
+        })
     }
 }
 

@@ -4,7 +4,7 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use super::bsdf::Bsdf;
-use super::geometry::{corner_values, Geometry, Hit, MovedTriangles};
+use super::geometry::{corner_values, Geometry, Hit, MovedTriangle};
 use super::sampling::uniform_triangle;
 use crate::scene::{Cone, LightKind, PlacedLight, Scene, TextureRef};
 
@@ -41,7 +41,7 @@ pub struct World<'a> {
     pub lights: Vec<PlacedLight>,
     /// How far each copy of the moving light is from where the glTF puts it.
     offsets: Vec<Vec3>,
-    moved: MovedTriangles,
+    moved: Vec<MovedTriangle>,
     emitters: Vec<Emitter>,
     /// Cumulative emitter probabilities, for sampling by binary search.
     emitter_cdf: Vec<f32>,
