@@ -112,21 +112,34 @@ impl Chunk {
         &self.input[Self::range(layer * MAX_INPUTS + a)][..self.len]
     }
 
+    /// Layer `l`'s ã of each sample of `rows`: its values, then 1 (the bias's input).
+    fn set_columns<'a, const W: usize>(&mut self, l: usize, rows: impl Iterator<Item = &'a [f32; W]> + Clone) {
+        for a in 0..W {
+            for (v, row) in self.input[Self::range(l * MAX_INPUTS + a)].iter_mut().zip(rows.clone()) {
+                *v = row[a];
+            }
+        }
+        let n = rows.count();
+        self.input[Self::range(l * MAX_INPUTS + W)][..n].fill(1.0);
+    }
+
     /// Fills the chunk with `train`'s `samples` (at most [`CHUNK_SAMPLES`]) at `params`, where
     /// their hidden activations are `hidden`.
     fn fill(&mut self, train: &Dataset, params: &[f32], hidden: &[Hidden<f32>], samples: Range<usize>) {
         self.len = samples.len();
         let n = self.len;
-        for (i, s) in samples.enumerate() {
-            let (h1, h2) = &hidden[s];
-            for (l, values) in [&train.inputs[s][..], &h1[..], &h2[..]].into_iter().enumerate() {
-                for (a, &v) in values.iter().chain([&1.0]).enumerate() {
-                    self.input[(l * MAX_INPUTS + a) * CHUNK_SAMPLES + i] = v;
-                }
-            }
-            self.gain[i] = train.gain(s);
-            for c in 0..OUTPUTS {
-                self.residual[c * CHUNK_SAMPLES + i] = train.targets[s][c];
+        // Column by column: a store per sample into each of the 60-odd columns, sample after
+        // sample, missed the cache at every one.
+        let rows = || samples.clone();
+        self.set_columns(0, rows().map(|s| &train.inputs[s]));
+        self.set_columns(1, rows().map(|s| &hidden[s].0));
+        self.set_columns(2, rows().map(|s| &hidden[s].1));
+        for (gain, s) in self.gain.iter_mut().zip(rows()) {
+            *gain = train.gain(s);
+        }
+        for c in 0..OUTPUTS {
+            for (r, s) in self.residual[Self::range(c)].iter_mut().zip(rows()) {
+                *r = train.targets[s][c];
             }
         }
         let mut sum = [0.0f32; CHUNK_SAMPLES];
