@@ -152,22 +152,21 @@ pub type Hidden<T> = ([T; HIDDEN1], [T; HIDDEN2]);
 
 /// The two tanh layers on normalised inputs.
 pub fn hidden_layers<T: Real>(p: &[T], x: &[T; INPUTS]) -> Hidden<T> {
-    let mut h1 = [T::ZERO; HIDDEN1];
-    for j in 0..HIDDEN1 {
-        let mut s = p[B1 + j];
-        for i in 0..INPUTS {
-            s += p[W1 + j * INPUTS + i] * x[i];
+    // Each unit's sum is its bias plus its inputs' terms in input order. The loop over inputs
+    // is the outer one so that the units' sums advance together rather than one after
+    // another, each add waiting on the last.
+    let mut h1: [T; HIDDEN1] = std::array::from_fn(|j| p[B1 + j]);
+    for (i, &x) in x.iter().enumerate() {
+        for (j, s) in h1.iter_mut().enumerate() {
+            *s += p[W1 + j * INPUTS + i] * x;
         }
-        h1[j] = s;
     }
     T::tanh_all(&mut h1);
-    let mut h2 = [T::ZERO; HIDDEN2];
-    for k in 0..HIDDEN2 {
-        let mut s = p[B2 + k];
-        for j in 0..HIDDEN1 {
-            s += p[W2 + k * HIDDEN1 + j] * h1[j];
+    let mut h2: [T; HIDDEN2] = std::array::from_fn(|k| p[B2 + k]);
+    for (j, &h) in h1.iter().enumerate() {
+        for (k, s) in h2.iter_mut().enumerate() {
+            *s += p[W2 + k * HIDDEN1 + j] * h;
         }
-        h2[k] = s;
     }
     T::tanh_all(&mut h2);
     (h1, h2)
