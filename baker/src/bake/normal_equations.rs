@@ -112,15 +112,15 @@ impl Chunk {
         &self.input[Self::range(layer * MAX_INPUTS + a)][..self.len]
     }
 
-    /// Layer `l`'s ã of each sample of `rows`: its values, then 1 (the bias's input).
+    /// Layer `l`'s ã of each sample of `rows` (the chunk's `len`): its values, then 1 (the
+    /// bias's input).
     fn set_columns<'a, const W: usize>(&mut self, l: usize, rows: impl Iterator<Item = &'a [f32; W]> + Clone) {
         for a in 0..W {
             for (v, row) in self.input[Self::range(l * MAX_INPUTS + a)].iter_mut().zip(rows.clone()) {
                 *v = row[a];
             }
         }
-        let n = rows.count();
-        self.input[Self::range(l * MAX_INPUTS + W)][..n].fill(1.0);
+        self.input[Self::range(l * MAX_INPUTS + W)][..self.len].fill(1.0);
     }
 
     /// Fills the chunk with `train`'s `samples` (at most [`CHUNK_SAMPLES`]) at `params`, where

@@ -159,15 +159,17 @@ impl Vertex {
 pub struct FirstVertex<'a> {
     si: &'a Interaction,
     vertex: Vertex,
-    /// `None` where no path from here reaches a second segment.
-    point_lights: Option<Vec3>,
+    point_lights: Vec3,
 }
 
 impl<'a> FirstVertex<'a> {
     pub fn new(world: &World, si: &'a Interaction, wo: Vec3, settings: &TraceSettings) -> Self {
         let vertex = Vertex::new(si, wo);
-        let leaves = settings.max_depth > 1 && vertex.bsdf.wo().z > 0.0;
-        let point_lights = leaves.then(|| point_lights_at(world, si, &vertex.frame, &vertex.bsdf));
+        // No shadow rays where no path reaches a second segment.
+        let point_lights = match settings.max_depth > 1 {
+            true => point_lights_at(world, si, &vertex.frame, &vertex.bsdf),
+            false => Vec3::ZERO,
+        };
         FirstVertex { si, vertex, point_lights }
     }
 }
@@ -216,9 +218,9 @@ pub fn radiance_leaving(
                 }
             }
         }
-        let point_lights = match (&current, first.point_lights) {
-            (None, Some(shared)) => shared,
-            _ => point_lights_at(world, si, &frame, &bsdf),
+        let point_lights = match current {
+            None => first.point_lights,
+            Some(_) => point_lights_at(world, si, &frame, &bsdf),
         };
         out.add(segments + 1, beta * point_lights);
 
