@@ -2,7 +2,9 @@
 //! synthetic target, and training on samples that are not finite.
 
 use rrf_baker::bake::lm::{initial_parameters, train, Dataset, LmSettings};
-use rrf_baker::network::{forward, forward_with_jacobian, Real, INPUTS, OUTPUTS, PARAMETERS};
+use rrf_baker::network::{
+    forward, forward_rows, forward_with_jacobian, hidden_layers, Real, INPUTS, OUTPUTS, PARAMETERS,
+};
 use rrf_baker::trace::sampling::Rng;
 
 #[test]
@@ -33,6 +35,28 @@ fn jacobian_matches_finite_differences() {
     for c in 0..OUTPUTS {
         assert!((y64[c] - f64::from(y32[c])).abs() < 1e-5);
     }
+}
+
+/// The batched forward pass gives every row the bits of the one-row pass: hidden activations
+/// and outputs, over a count of rows that leaves a partial batch, with inputs from small to
+/// saturating.
+#[test]
+fn forward_rows_matches_one_row_at_a_time_to_the_bit() {
+    let params = initial_parameters(5, [0.4, -0.2, 0.1]);
+    let mut rng = Rng::new(2, 9);
+    let rows: Vec<[f32; INPUTS]> =
+        (0..29).map(|r| std::array::from_fn(|_| (2.0 * rng.next_f32() - 1.0) * [1e-4, 1.0, 30.0][r % 3])).collect();
+    let mut seen = 0;
+    forward_rows(&params, &rows, |(h1, h2), y| {
+        let x = &rows[seen];
+        let (w1, w2) = hidden_layers(&params, x);
+        let bits = |v: &[f32]| v.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(h1), bits(&w1), "row {seen}: first layer");
+        assert_eq!(bits(h2), bits(&w2), "row {seen}: second layer");
+        assert_eq!(bits(y), bits(&forward(&params, x)), "row {seen}: outputs");
+        seen += 1;
+    });
+    assert_eq!(seen, rows.len());
 }
 
 /// The f32 activation, eight lanes at a time with the tail padded (a layer of 20 is 8 + 8 + 4),

@@ -18,9 +18,7 @@ use faer::linalg::solvers::Solve;
 use faer::{Mat, Side};
 
 use super::normal_equations::normal_equations;
-use crate::network::{
-    forward, hidden_layers, output_layer, Hidden, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3,
-};
+use crate::network::{forward_rows, Hidden, B1, B2, B3, HIDDEN1, HIDDEN2, INPUTS, OUTPUTS, PARAMETERS, W1, W2, W3};
 use crate::trace::sampling::Rng;
 
 /// Normalised inputs and (scaled) targets.
@@ -50,34 +48,32 @@ impl Dataset {
 
     /// Mean squared error per channel of the network `params` on this set.
     pub fn mse(&self, params: &[f32]) -> f64 {
-        self.mse_of(|x| forward(params, x))
+        self.mse_of(params, |_| {})
     }
 
     /// [`Dataset::mse`], keeping each row's hidden activations in `hidden` for the Jacobian
     /// at the same parameters.
     fn mse_keeping_hidden(&self, params: &[f32], hidden: &mut Vec<Hidden<f32>>) -> f64 {
         hidden.clear();
-        self.mse_of(|x| {
-            let h = hidden_layers(params, x);
-            let y = output_layer(params, &h.1);
-            hidden.push(h);
-            y
-        })
+        self.mse_of(params, |h| hidden.push(*h))
     }
 
-    /// Mean squared error per channel of the outputs `network(input)`, row by row in order.
-    fn mse_of(&self, mut network: impl FnMut(&[f32; INPUTS]) -> [f32; OUTPUTS]) -> f64 {
+    /// Mean squared error per channel of the network `params`, row by row in order, passing
+    /// each row's hidden activations to `keep`.
+    fn mse_of(&self, params: &[f32], mut keep: impl FnMut(&Hidden<f32>)) -> f64 {
         if self.is_empty() {
             return 0.0;
         }
         let mut sum = 0.0f64;
-        for (i, (x, t)) in self.inputs.iter().zip(&self.targets).enumerate() {
-            let y = network(x);
-            for c in 0..OUTPUTS {
-                let e = f64::from(self.gain(i) * y[c] - t[c]);
+        let mut row = 0;
+        forward_rows(params, &self.inputs, |h, y| {
+            for (y, t) in y.iter().zip(&self.targets[row]) {
+                let e = f64::from(self.gain(row) * y - t);
                 sum += e * e;
             }
-        }
+            keep(h);
+            row += 1;
+        });
         sum / (self.len() * OUTPUTS) as f64
     }
 }

@@ -648,15 +648,18 @@ fn samples_read(scene: &Scene, settings: &BakeSettings, points: &[Sample]) -> Ve
     points.iter().enumerate().for_each(|(i, s)| own[s.object as usize].push(i));
     let mut objects: Vec<u32> = plan.jobs.iter().map(|&(object, _)| object).collect();
     objects.dedup();
-    for object in objects {
-        let samples = &plan.by_object[object as usize];
-        let borrowed = lent[object as usize].as_ref().filter(|_| samples.len() > own[object as usize].len());
-        let sources: Vec<usize> =
-            own[object as usize].iter().chain(borrowed.iter().flat_map(|l| &l.sources)).copied().collect();
-        for (p, _) in train::targets_read(scene, settings, object, samples).iter().enumerate().filter(|(_, &r)| r) {
-            read[sources[p]] = true;
-        }
-    }
+    let read_by_object: Vec<Vec<usize>> = objects
+        .into_par_iter()
+        .map(|object| {
+            let samples = &plan.by_object[object as usize];
+            let borrowed = lent[object as usize].as_ref().filter(|_| samples.len() > own[object as usize].len());
+            let sources: Vec<usize> =
+                own[object as usize].iter().chain(borrowed.iter().flat_map(|l| &l.sources)).copied().collect();
+            let targets = train::targets_read(scene, settings, object, samples);
+            targets.iter().zip(sources).filter(|(&r, _)| r).map(|(_, source)| source).collect()
+        })
+        .collect();
+    read_by_object.into_iter().flatten().for_each(|i| read[i] = true);
     read
 }
 

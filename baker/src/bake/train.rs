@@ -245,7 +245,13 @@ fn key(settings: &BakeSettings, s: &Sample) -> u64 {
 /// The samples a network learns from: of `samples`, at most `max_samples_per_network` with
 /// the lowest [`key`]s, a deterministic random subset, as positions in `samples` in key order.
 fn subset(settings: &BakeSettings, samples: &[&Sample]) -> Vec<usize> {
-    let mut order: Vec<(u64, usize)> = samples.iter().enumerate().map(|(i, s)| (key(settings, s), i)).collect();
+    lowest_keys(settings, samples.iter().map(|s| key(settings, s)))
+}
+
+/// Of samples whose [`key`]s are `keys`, the positions of the `max_samples_per_network` with
+/// the lowest, in key order: [`subset`] for a caller that has the keys already.
+fn lowest_keys(settings: &BakeSettings, keys: impl Iterator<Item = u64>) -> Vec<usize> {
+    let mut order: Vec<(u64, usize)> = keys.enumerate().map(|(i, k)| (k, i)).collect();
     order.sort_unstable();
     order.truncate(settings.max_samples_per_network);
     order.into_iter().map(|(_, i)| i).collect()
@@ -273,19 +279,19 @@ fn validation_flags<'a>(settings: &BakeSettings, samples: impl Iterator<Item = &
 pub fn targets_read(scene: &Scene, settings: &BakeSettings, object: u32, samples: &[&Sample]) -> Vec<bool> {
     let mut read = vec![false; samples.len()];
     let bounds = scene.objects[object as usize].bounds();
+    // Each sample's key, hashed once for the subsets of every node.
+    let keys: Vec<u64> = samples.iter().map(|s| key(settings, s)).collect();
     let all: Vec<usize> = (0..samples.len()).collect();
     let mut nodes = vec![(Node::root(scene, object), all)];
     while let Some((node, within)) = nodes.pop() {
-        let node_samples: Vec<&Sample> = within.iter().map(|&i| samples[i]).collect();
-        for i in subset(settings, &node_samples) {
+        for i in lowest_keys(settings, within.iter().map(|&i| keys[i])) {
             read[within[i]] = true;
         }
         if !node.region.is_whole() && settings.blend_band > 0.0 {
             // `fit_blend`'s samples: those of the whole object inside the leaf's blend box.
             let blend = node.region.blend_box(bounds.min, bounds.max, settings.blend_band);
             let near: Vec<usize> = (0..samples.len()).filter(|&i| blend.weight(position(samples[i])) > 0.0).collect();
-            let near_samples: Vec<&Sample> = near.iter().map(|&i| samples[i]).collect();
-            for i in subset(settings, &near_samples) {
+            for i in lowest_keys(settings, near.iter().map(|&i| keys[i])) {
                 read[near[i]] = true;
             }
         }
