@@ -40,6 +40,9 @@ pub struct Geometry {
     pub tangents: Vec<Vec4>,
     /// Triangle ids of the moving area light, not in the BVH.
     pub moving: Vec<u32>,
+    /// Ids of the triangles whose material emits, in order: a light configuration's emitters
+    /// are found among these, not among every triangle.
+    pub emissive: Vec<u32>,
     /// Per object id, its plane if it is a planar mirror ([`Scene::mirrors`]).
     pub mirrors: Vec<Option<Mirror>>,
 }
@@ -83,6 +86,7 @@ impl Geometry {
             uvs: Vec::new(),
             tangents: Vec::new(),
             moving: Vec::new(),
+            emissive: Vec::new(),
             mirrors: scene.mirror_by_object(),
         };
         for object in &scene.objects {
@@ -97,6 +101,9 @@ impl Geometry {
                     let moving = Some(object.id) == moving_object;
                     if moving {
                         g.moving.push(id);
+                    }
+                    if scene.materials[part.material as usize].is_emissive() {
+                        g.emissive.push(id);
                     }
                     g.triangles.push(TriangleInfo {
                         vertices: object.triangles[t as usize].map(|i| base + i),

@@ -45,9 +45,10 @@ pub struct World<'a> {
     emitters: Vec<Emitter>,
     /// Cumulative emitter probabilities, for sampling by binary search.
     emitter_cdf: Vec<f32>,
-    /// Emitter index by triangle id, for the MIS weight of a BSDF-sampled hit; a moving
-    /// triangle's copies follow its first one.
-    emitter_of_triangle: Vec<u32>,
+    /// The emitter index of each of the geometry's emissive triangles (`Geometry::emissive`),
+    /// for the MIS weight of a BSDF-sampled hit; a moving triangle's copies follow its first
+    /// one.
+    emitter_of_emissive: Vec<u32>,
     pub point_lights: Vec<PointLightAt>,
 }
 
@@ -114,19 +115,17 @@ impl<'a> World<'a> {
         }
 
         let mut emitters = Vec::new();
-        let mut emitter_of_triangle = vec![NO_EMITTER; geometry.triangles.len()];
-        for (id, info) in geometry.triangles.iter().enumerate() {
+        let mut emitter_of_emissive = vec![NO_EMITTER; geometry.emissive.len()];
+        for (k, &id) in geometry.emissive.iter().enumerate() {
+            let info = &geometry.triangles[id as usize];
             let material = &scene.materials[info.material as usize];
-            if !material.is_emissive() {
-                continue;
-            }
             let uvs = corner_values(&geometry.uvs, info.vertices);
             let texture = material.emissive_texture;
             // The same for every copy: a copy moves the triangle, not its UVs.
             let share = texture.map_or(1.0, |t| textured_share(scene, t, uvs));
             let copies = if info.moving { lights.len() } else { 1 };
             for copy in 0..copies {
-                let corners = geometry.corners(id as u32, offsets[copy]);
+                let corners = geometry.corners(id, offsets[copy]);
                 let [a, b, c] = corners;
                 let cross = (b - a).cross(c - a);
                 let area = 0.5 * cross.length();
@@ -135,7 +134,7 @@ impl<'a> World<'a> {
                 }
                 let emission = material.emission * if info.moving { lights[copy].scale } else { Vec3::ONE };
                 if copy == 0 {
-                    emitter_of_triangle[id] = emitters.len() as u32;
+                    emitter_of_emissive[k] = emitters.len() as u32;
                 }
                 emitters.push(Emitter {
                     corners,
@@ -153,7 +152,7 @@ impl<'a> World<'a> {
         if total <= 0.0 {
             // Every copy of the only area light is black: nothing to sample.
             emitters.clear();
-            emitter_of_triangle.fill(NO_EMITTER);
+            emitter_of_emissive.fill(NO_EMITTER);
         }
         let mut cdf = Vec::with_capacity(emitters.len());
         let mut running = 0.0;
@@ -170,7 +169,7 @@ impl<'a> World<'a> {
             offsets,
             emitters,
             emitter_cdf: cdf,
-            emitter_of_triangle,
+            emitter_of_emissive,
             point_lights,
         }
     }
@@ -272,7 +271,10 @@ impl<'a> World<'a> {
     /// Solid-angle density with which [`World::sample_area_light`] would have produced the
     /// point of `hit`, met along direction `dir`.
     pub fn area_light_pdf(&self, hit: Hit, dir: Vec3) -> f32 {
-        let index = self.emitter_of_triangle[hit.triangle as usize];
+        let Ok(k) = self.geometry.emissive.binary_search(&hit.triangle) else {
+            return 0.0;
+        };
+        let index = self.emitter_of_emissive[k];
         if index == NO_EMITTER {
             return 0.0;
         }
