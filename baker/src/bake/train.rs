@@ -118,8 +118,8 @@ pub struct NetworkData {
     pub validation_noise: f64,
 }
 
-/// A deterministic random subset of `samples` (those of `node`, [`subset`]), split into
-/// training and validation sets ([`is_validation`]).
+/// A deterministic random subset of `samples` (those of `node`, [`lowest_keys`]), split into
+/// training and validation sets ([`validation_flags`]).
 pub fn network_data(
     scene: &Scene,
     settings: &BakeSettings,
@@ -127,18 +127,29 @@ pub fn network_data(
     component: Component,
     samples: &[&Sample],
 ) -> NetworkData {
-    let order = subset(settings, samples);
+    keyed_network_data(scene, settings, object, component, &keyed(settings, samples))
+}
+
+/// [`network_data`] of samples whose keys are hashed already.
+fn keyed_network_data(
+    scene: &Scene,
+    settings: &BakeSettings,
+    object: u32,
+    component: Component,
+    samples: &[Keyed],
+) -> NetworkData {
+    let order = lowest_keys(settings, samples.iter().map(|s| s.key));
     let (input_min, input_max) = input_ranges(scene, object);
     let target = |s: &Sample| s.target(component);
     let rms = {
-        let sum: f64 = order.iter().flat_map(|&i| target(samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
+        let sum: f64 = order.iter().flat_map(|&i| target(&samples[i])).map(|v| f64::from(v) * f64::from(v)).sum();
         ((sum / (order.len() * OUTPUTS) as f64).sqrt() as f32).max(1e-6)
     };
-    let validates = validation_flags(settings, order.iter().map(|&i| samples[i]));
+    let validates = validation_flags(settings, order.iter().map(|&i| samples[i].key));
     let (mut train, mut validation) = (Dataset::default(), Dataset::default());
     let mut noise = 0.0f64;
     for (&i, &validates) in order.iter().zip(&validates) {
-        let s = samples[i];
+        let s = &samples[i];
         let set = if validates {
             noise += f64::from(s.noise(component));
             &mut validation
@@ -163,10 +174,11 @@ pub fn train_tree(
 ) -> Vec<(Network, NetworkInfo)> {
     let tree = Tree { scene, settings, object, component };
     let root = Node::root(scene, object);
-    let trained = train_network(tree, &root, samples, None);
-    let mut leaves = grow(tree, root, samples, trained);
+    let samples = keyed(settings, samples);
+    let trained = train_network(tree, &root, &samples, None);
+    let mut leaves = grow(tree, root, &samples, trained);
     if leaves.len() > 1 && settings.blend_band > 0.0 {
-        fit_blend(tree, samples, &mut leaves);
+        fit_blend(tree, &samples, &mut leaves);
     }
     leaves
 }
@@ -179,18 +191,17 @@ pub fn train_tree(
 /// the share of the light that its neighbours do not already give. Each leaf keeps the
 /// parameters with the lowest validation error of the blend, its starting ones included, and
 /// records that error.
-fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInfo)]) {
+fn fit_blend(tree: Tree, samples: &[Keyed], leaves: &mut [(Network, NetworkInfo)]) {
     let Tree { settings, .. } = tree;
     for i in 0..leaves.len() {
         let own = leaves[i].0.blend;
-        let near: Vec<(&Sample, f32)> =
-            samples.iter().map(|&s| (s, own.weight(position(s)))).filter(|&(_, w)| w > 0.0).collect();
+        let near: Vec<(Keyed, f32)> =
+            samples.iter().map(|&s| (s, own.weight(position(&s)))).filter(|&(_, w)| w > 0.0).collect();
         if near.iter().all(|&(_, w)| w == 1.0) {
             continue; // no sample in a band: the leaf's own fit is the blend's
         }
-        let near_samples: Vec<&Sample> = near.iter().map(|&(s, _)| s).collect();
-        let order = subset(settings, &near_samples);
-        let validates = validation_flags(settings, order.iter().map(|&k| near_samples[k]));
+        let order = lowest_keys(settings, near.iter().map(|(s, _)| s.key));
+        let validates = validation_flags(settings, order.iter().map(|&k| near[k].0.key));
         let network = &leaves[i].0;
         let rms = network.output_scale;
         let (mut train, mut validation) = (Dataset::default(), Dataset::default());
@@ -200,7 +211,7 @@ fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInf
             if validates {
                 noise += f64::from(s.noise(tree.component));
             }
-            let p = position(s);
+            let p = position(&s);
             let others: Vec3 = leaves
                 .iter()
                 .enumerate()
@@ -232,7 +243,7 @@ fn fit_blend(tree: Tree, samples: &[&Sample], leaves: &mut [(Network, NetworkInf
 const BLEND_PATIENCE: u32 = 5;
 
 /// A sample's place in every subset's order: a hash of its object and inputs under the bake's
-/// seed. A node's subset is its samples with the lowest keys ([`subset`]), so a half's subset
+/// seed. A node's subset is its samples with the lowest keys ([`lowest_keys`]), so a half's subset
 /// holds every sample of its parent's that lies inside it, and the nodes of one object
 /// together read not many more samples than those of its deepest level do.
 fn key(settings: &BakeSettings, s: &Sample) -> u64 {
@@ -242,14 +253,27 @@ fn key(settings: &BakeSettings, s: &Sample) -> u64 {
     mix64(hash.0 ^ settings.seed)
 }
 
-/// The samples a network learns from: of `samples`, at most `max_samples_per_network` with
-/// the lowest [`key`]s, a deterministic random subset, as positions in `samples` in key order.
-fn subset(settings: &BakeSettings, samples: &[&Sample]) -> Vec<usize> {
-    lowest_keys(settings, samples.iter().map(|s| key(settings, s)))
+/// A sample and its [`key`], hashed once for every node of a tree that holds the sample.
+#[derive(Clone, Copy)]
+struct Keyed<'a> {
+    key: u64,
+    sample: &'a Sample,
 }
 
-/// Of samples whose [`key`]s are `keys`, the positions of the `max_samples_per_network` with
-/// the lowest, in key order: [`subset`] for a caller that has the keys already.
+impl std::ops::Deref for Keyed<'_> {
+    type Target = Sample;
+    fn deref(&self) -> &Sample {
+        self.sample
+    }
+}
+
+/// `samples`, each with its key.
+fn keyed<'a>(settings: &BakeSettings, samples: &[&'a Sample]) -> Vec<Keyed<'a>> {
+    samples.iter().map(|&sample| Keyed { key: key(settings, sample), sample }).collect()
+}
+
+/// The samples a network learns from: of samples whose [`key`]s are `keys`, the positions of
+/// the `max_samples_per_network` with the lowest, in key order: a deterministic random subset.
 fn lowest_keys(settings: &BakeSettings, keys: impl Iterator<Item = u64>) -> Vec<usize> {
     let mut order: Vec<(u64, usize)> = keys.enumerate().map(|(i, k)| (k, i)).collect();
     order.sort_unstable();
@@ -257,13 +281,13 @@ fn lowest_keys(settings: &BakeSettings, keys: impl Iterator<Item = u64>) -> Vec<
     order.into_iter().map(|(_, i)| i).collect()
 }
 
-/// Which of a subset's `samples` validate rather than train: a `validation_fraction` of all
-/// samples, picked by the low bits of their [`key`], so that a sample validates in every
-/// network that holds it or in none, and no half validates on what its parent trained on. At
-/// least one does (the first).
-fn validation_flags<'a>(settings: &BakeSettings, samples: impl Iterator<Item = &'a Sample>) -> Vec<bool> {
+/// Which of a subset's samples, whose [`key`]s are `keys`, validate rather than train: a
+/// `validation_fraction` of all samples, picked by the low bits of their key, so that a sample
+/// validates in every network that holds it or in none, and no half validates on what its
+/// parent trained on. At least one does (the first).
+fn validation_flags(settings: &BakeSettings, keys: impl Iterator<Item = u64>) -> Vec<bool> {
     let low_bits = |k: u64| (k & 0xff_ffff) as f32 / (1u32 << 24) as f32;
-    let mut flags: Vec<bool> = samples.map(|s| low_bits(key(settings, s)) < settings.validation_fraction).collect();
+    let mut flags: Vec<bool> = keys.map(|k| low_bits(k) < settings.validation_fraction).collect();
     if !flags.contains(&true) {
         if let Some(first) = flags.first_mut() {
             *first = true;
@@ -378,26 +402,27 @@ const PATIENCE: u32 = 10;
 /// each grown in turn. A node is split while the tree may grow, its network's error is above
 /// its targets' noise, each half has `min_samples`, and the halves agree where they meet
 /// ([`MAX_SEAM`]).
-fn grow(tree: Tree, node: Node, samples: &[&Sample], trained: Trained) -> Vec<(Network, NetworkInfo)> {
+fn grow(tree: Tree, node: Node, samples: &[Keyed], trained: Trained) -> Vec<(Network, NetworkInfo)> {
     let depth = node.region.0.len() as u32;
     if depth >= tree.settings.split_depth || trained.excess <= 0.0 {
         return vec![finish(tree, trained)];
     }
     let halves = node.children().map(|child| {
         let b = child.sample_box();
-        let inside: Vec<&Sample> = samples.iter().copied().filter(|s| b.contains(position(s))).collect();
+        let inside: Vec<Keyed> = samples.iter().copied().filter(|s| b.contains(position(s))).collect();
         (child, inside)
     });
     if halves.iter().any(|(_, inside)| inside.len() < tree.settings.min_samples) {
         return vec![finish(tree, trained)];
     }
     let [(low, low_samples), (high, high_samples)] = halves;
-    let half = |node: &Node, samples: &[&Sample]| train_network(tree, node, samples, Some(&trained.network));
+    let half = |node: &Node, samples: &[Keyed]| train_network(tree, node, samples, Some(&trained.network));
     let (low_trained, high_trained) = rayon::join(|| half(&low, &low_samples), || half(&high, &high_samples));
     // Where the halves meet, both learned the same samples; halves that disagree there would
     // trade a smooth error for a visible seam (a mirror's halves do: their reflections differ).
     let (low_box, high_box) = (low.sample_box(), high.sample_box());
-    let shared = samples.iter().filter(|s| low_box.contains(position(s)) && high_box.contains(position(s)));
+    let shared =
+        samples.iter().map(|s| s.sample).filter(|s| low_box.contains(position(s)) && high_box.contains(position(s)));
     let seam = disagreement(&low_trained.network, &high_trained.network, shared, trained.network.output_scale);
     if seam > MAX_SEAM {
         return vec![finish(tree, trained)];
@@ -410,7 +435,7 @@ fn grow(tree: Tree, node: Node, samples: &[&Sample], trained: Trained) -> Vec<(N
 
 /// The mean squared difference of networks `a` and `b` on `samples`, per channel, relative to
 /// `scale`².
-fn disagreement<'a>(a: &Network, b: &Network, samples: impl Iterator<Item = &'a &'a Sample>, scale: f32) -> f64 {
+fn disagreement<'a>(a: &Network, b: &Network, samples: impl Iterator<Item = &'a Sample>, scale: f32) -> f64 {
     let (mut sum, mut count) = (0.0f64, 0usize);
     for s in samples {
         let d = a.evaluate(&s.inputs) - b.evaluate(&s.inputs);
@@ -430,9 +455,9 @@ fn position(s: &Sample) -> Vec3 {
 /// rescaled to its own targets), so that Levenberg–Marquardt, which keeps the parameters with
 /// the best validation error, refines the parent where the half's samples ask for it and
 /// elsewhere stays near the parent, which learned from all of the object's samples.
-fn train_network(tree: Tree, node: &Node, samples: &[&Sample], parent: Option<&Network>) -> Trained {
+fn train_network(tree: Tree, node: &Node, samples: &[Keyed], parent: Option<&Network>) -> Trained {
     let Tree { scene, settings, object, component } = tree;
-    let data = network_data(scene, settings, object, component, samples);
+    let data = keyed_network_data(scene, settings, object, component, samples);
     let rms = data.output_scale;
     let initial = match parent {
         Some(parent) => {
