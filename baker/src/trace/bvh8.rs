@@ -229,7 +229,7 @@ impl Bvh8 {
     #[inline(always)]
     pub fn closest(&self, ray: &Ray, mut accept: impl FnMut(u32, f32) -> bool) -> Option<(u32, f32)> {
         let mut best = None;
-        self.walk(ray, |walk, leaf| {
+        self.walk::<true>(ray, |walk, leaf| {
             let (t, mut hits) = leaf.hits(&walk.lanes, walk.tmin, walk.tmax);
             while hits != 0 {
                 let lane = hits.trailing_zeros() as usize;
@@ -249,7 +249,8 @@ impl Bvh8 {
     #[inline(always)]
     pub fn any(&self, ray: &Ray, mut accept: impl FnMut(u32, f32) -> bool) -> bool {
         let mut found = false;
-        self.walk(ray, |walk, leaf| {
+        // Any hit ends the walk, whichever box it is in: no need to sort the boxes.
+        self.walk::<false>(ray, |walk, leaf| {
             let (t, mut hits) = leaf.hits(&walk.lanes, walk.tmin, walk.tmax);
             while hits != 0 && !found {
                 let lane = hits.trailing_zeros() as usize;
@@ -261,11 +262,11 @@ impl Bvh8 {
         found
     }
 
-    /// Walks the ray through the tree, nearest box first, and calls
-    /// `visit(walk, leaf)` at each leaf whose box it meets; `visit` may lower `walk.tmax`, and
-    /// returns whether the walk is over.
+    /// Walks the ray through the tree, nearest box first if `NEAREST_FIRST` (else in any
+    /// order), and calls `visit(walk, leaf)` at each leaf whose box it meets; `visit` may
+    /// lower `walk.tmax`, and returns whether the walk is over.
     #[inline(always)]
-    fn walk(&self, ray: &Ray, mut visit: impl FnMut(&mut Walk, &Triangles8) -> bool) {
+    fn walk<const NEAREST_FIRST: bool>(&self, ray: &Ray, mut visit: impl FnMut(&mut Walk, &Triangles8) -> bool) {
         if self.nodes.is_empty() {
             return;
         }
@@ -295,6 +296,15 @@ impl Bvh8 {
             }
             let node = &self.nodes[entry as usize];
             let (near, mut hits) = node.hits(&walk.lanes, walk.tmin, walk.tmax);
+            if !NEAREST_FIRST {
+                while hits != 0 {
+                    let lane = hits.trailing_zeros() as usize;
+                    hits &= hits - 1;
+                    stack[top] = (node.children[lane], near[lane]);
+                    top += 1;
+                }
+                continue;
+            }
             // Push the farthest first so that the nearest is popped next.
             let mut order = [(0.0f32, 0u32); WIDTH];
             let mut count = 0;
