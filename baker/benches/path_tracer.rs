@@ -3,7 +3,9 @@
 //! and on one. `--scene` names another of `scenes/` (its first view, its light where the glTF
 //! puts it).
 //!
-//! `cargo bench -p rrf-baker --bench path_tracer [-- --spp N] [--scene NAME]`
+//! `--centre` starts every path of a pixel at its centre, as `rrf eval`'s references do.
+//!
+//! `cargo bench -p rrf-baker --bench path_tracer [-- --spp N] [--scene NAME] [--centre]`
 //!
 //! The checksum (FNV-1a of every pixel's components) tells whether a change to the
 //! tracer that should only make it faster left its output as it was, to the bit.
@@ -19,6 +21,10 @@ fn main() {
     let option = |name: &str| std::env::args().skip_while(|a| a != name).nth(1);
     let spp = option("--spp").and_then(|s| s.parse().ok()).unwrap_or(256u32);
     let name = option("--scene").unwrap_or_else(|| "cornell-box".into());
+    let footprint = match std::env::args().any(|a| a == "--centre") {
+        true => Footprint::Centre,
+        false => Footprint::Area,
+    };
     let scene = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes").join(&name))
         .unwrap_or_else(|e| panic!("scenes/{name} does not load: {e}"));
     let start = Instant::now();
@@ -32,10 +38,12 @@ fn main() {
         spp,
         trace: TraceSettings { max_depth: 8, rr_depth: Some(5) },
         seed: 0,
-        footprint: Footprint::Area,
+        footprint,
     };
     let paths = 256.0 * 256.0 * f64::from(spp);
-    println!("{name} 256x256, {spp} spp, max depth 8, roulette from 5; BVH build {bvh_ms:.2} ms");
+    println!(
+        "{name} 256x256, {spp} spp, {footprint:?} footprint, max depth 8, roulette from 5; BVH build {bvh_ms:.2} ms"
+    );
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     for threads in [cores, 1] {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");

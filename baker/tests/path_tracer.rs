@@ -609,6 +609,32 @@ fn centre_footprint_traces_the_renderers_rays() {
     assert!(rim > 0, "an area footprint blends the light's rim");
 }
 
+/// A centre-footprint image finds each pixel's first vertex once and shares it among the
+/// pixel's paths; each path is still, to the bit, the one `trace_ray` traces along the pixel's
+/// centre ray with the path's own random stream.
+#[test]
+fn centre_footprint_paths_are_trace_rays_paths() {
+    let scene = cornell();
+    let geometry = Geometry::new(&scene);
+    let world = World::new(&scene, &geometry, None);
+    let camera = Camera::new(&scene.views[0], 1.0);
+    let (width, height, spp, seed) = (12, 10, 3, 21);
+    let s = RenderSettings { width, height, spp, trace: TraceSettings::default(), seed, footprint: Footprint::Centre };
+    let image = render(&world, &camera, &s, &|_| {});
+    for y in 0..height {
+        for x in 0..width {
+            let pixel = u64::from(y * width + x);
+            let film = (Vec2::new(x as f32, y as f32) + 0.5) / Vec2::new(width as f32, height as f32);
+            let mut sum = Radiance::default();
+            for sample in 0..spp {
+                let mut rng = Rng::new(seed, pixel * u64::from(spp) + u64::from(sample));
+                sum += trace_ray(&world, camera.eye, camera.direction(film), &s.trace, &mut rng);
+            }
+            assert_eq!(image.pixels[pixel as usize], sum.scaled(1.0 / spp as f32), "pixel ({x}, {y})");
+        }
+    }
+}
+
 /// Moving the area light moves its light: the floor under the new position gets brighter.
 #[test]
 fn moving_the_light_moves_the_light() {

@@ -4,7 +4,7 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::camera::Camera;
-use super::integrator::{trace_ray, Radiance, TraceSettings};
+use super::integrator::{radiance_leaving, trace_ray, FirstVertex, Radiance, TraceSettings};
 use super::sampling::Rng;
 use super::world::World;
 
@@ -82,17 +82,31 @@ pub fn render(world: &World, camera: &Camera, s: &RenderSettings, progress: &(dy
 
 fn render_pixel(world: &World, camera: &Camera, s: &RenderSettings, x: u32, y: u32) -> Radiance {
     let pixel = u64::from(y) * u64::from(s.width) + u64::from(x);
-    let mut sum = Radiance::default();
+    // One stream per path, so that a path's length never shifts another path's numbers.
+    let stream = |sample: u32| Rng::new(s.seed, pixel * u64::from(s.spp) + u64::from(sample));
     let size = Vec2::new(s.width as f32, s.height as f32);
-    for sample in 0..s.spp {
-        // One stream per path, so that a path's length never shifts another path's numbers.
-        let mut rng = Rng::new(s.seed, pixel * u64::from(s.spp) + u64::from(sample));
-        let offset = match s.footprint {
-            Footprint::Area => rng.next_vec2(),
-            Footprint::Centre => Vec2::splat(0.5),
-        };
-        let film = (Vec2::new(x as f32, y as f32) + offset) / size;
-        sum += trace_ray(world, camera.eye, camera.direction(film), &s.trace, &mut rng);
+    let direction = |offset: Vec2| camera.direction((Vec2::new(x as f32, y as f32) + offset) / size);
+    let mut sum = Radiance::default();
+    match s.footprint {
+        Footprint::Area => {
+            for sample in 0..s.spp {
+                let mut rng = stream(sample);
+                let dir = direction(rng.next_vec2());
+                sum += trace_ray(world, camera.eye, dir, &s.trace, &mut rng);
+            }
+        }
+        Footprint::Centre => {
+            // Every path starts along the same ray: its first vertex is found once, as
+            // `trace_ray` would find it for each path.
+            let dir = direction(Vec2::splat(0.5));
+            if let Some(hit) = world.intersect(camera.eye, dir) {
+                let si = world.interaction(camera.eye, dir, hit);
+                let first = FirstVertex::new(world, &si, -dir, &s.trace);
+                for sample in 0..s.spp {
+                    sum += radiance_leaving(world, &first, None, &s.trace, &mut stream(sample));
+                }
+            }
+        }
     }
     sum.scaled(1.0 / s.spp.max(1) as f32)
 }
