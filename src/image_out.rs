@@ -42,11 +42,18 @@ pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Vec3], exposu
 fn write_kind(kind: ImageKind, path: &Path, width: u32, height: u32, pixels: &[Vec3], exposure: f32) -> Result<()> {
     match kind {
         ImageKind::Exr => {
-            exr::prelude::write_rgb_file(path, width as usize, height as usize, |x, y| {
-                let p = pixels[y * width as usize + x];
+            use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, WritableImage};
+            let channels = SpecificChannels::rgb(|exr::prelude::Vec2(x, y): exr::prelude::Vec2<usize>| {
+                let p: Vec3 = pixels[y * width as usize + x];
                 (p.x, p.y, p.z)
-            })
-            .with_context(|| format!("cannot write {}", path.display()))?;
+            });
+            // Chunks in a fixed order: compressed in parallel with no order asked for, they
+            // land as they finish, and the same pixels could make different bytes.
+            let encoding = Encoding { line_order: LineOrder::Increasing, ..Encoding::FAST_LOSSLESS };
+            Image::from_encoded_channels((width as usize, height as usize), encoding, channels)
+                .write()
+                .to_file(path)
+                .with_context(|| format!("cannot write {}", path.display()))?;
         }
         ImageKind::Png => {
             image::RgbImage::from_raw(width, height, tonemap_rgb8(pixels, exposure))

@@ -61,6 +61,27 @@ fn images_are_replaced_whole() {
     std::fs::remove_dir_all(fresh).unwrap();
 }
 
+/// An EXR lists its chunks in increasing order, so the same pixels always make the same bytes
+/// (chunks compressed in parallel with no order asked for land as they finish): two writes of
+/// the same reference are byte-identical, and the header says the order.
+#[test]
+fn exr_files_are_the_same_bytes_for_the_same_pixels() {
+    let dir = std::env::temp_dir().join(format!("rrf-exr-order-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |name: &str| {
+        let out = dir.join(name);
+        let args = ["reference", "scenes/cornell-box", "--size", "300x200", "--spp", "1", "-o"];
+        let run = rrf(&[&args[..], &[out.to_str().unwrap()]].concat(), &[]);
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        out
+    };
+    let (a, b) = (write("a.exr"), write("b.exr"));
+    let meta = exr::meta::MetaData::read_from_file(&a, false).unwrap();
+    assert_eq!(meta.headers[0].line_order, exr::meta::attribute::LineOrder::Increasing);
+    assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(), "two writes of the same image differ");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 /// `rrf info SCENE | head -1`: a reader that stops early ends rrf quietly, not with a panic.
 #[test]
 fn a_closed_standard_output_ends_quietly() {
