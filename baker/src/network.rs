@@ -113,8 +113,9 @@ pub fn evaluate_blended(leaves: &[&Network], raw: &[f32; INPUTS]) -> Vec3 {
         .sum()
 }
 
-/// The float types the network runs in: f32 for inference and training, f64 where a test
-/// needs the precision (finite differences).
+/// The float types the network runs in: f32 for inference and training, eight f32 lanes for
+/// eight rows at once ([`forward_rows`]), f64 where a test needs the precision (finite
+/// differences).
 pub trait Real: Copy + std::ops::Mul<Output = Self> + std::ops::Sub<Output = Self> + std::ops::AddAssign {
     const ZERO: Self;
     const ONE: Self;
@@ -133,6 +134,17 @@ impl Real for f32 {
             lanes[..chunk.len()].copy_from_slice(chunk);
             let tanh = wide::f32x8::from(lanes).tanh().to_array();
             chunk.copy_from_slice(&tanh[..chunk.len()]);
+        }
+    }
+}
+
+impl Real for wide::f32x8 {
+    const ZERO: Self = wide::f32x8::ZERO;
+    const ONE: Self = wide::f32x8::ONE;
+    /// Each lane's tanh: the function f32's `tanh_all` applies, lane for lane.
+    fn tanh_all(values: &mut [Self]) {
+        for v in values {
+            *v = v.tanh();
         }
     }
 }
@@ -173,38 +185,19 @@ pub fn hidden_layers<T: Real>(p: &[T], x: &[T; INPUTS]) -> Hidden<T> {
 }
 
 /// The network on `rows` of normalised inputs, eight rows at a time, a row per SIMD lane:
-/// `each(hidden, outputs)` is called for every row in order. A row's values are
-/// [`hidden_layers`]' and [`output_layer`]'s to the bit: each sum has the same terms in the
-/// same order, and tanh is the same lane-wise function. One row at a time, the 20 and 10 units
-/// of a layer fill its tanh's eight lanes only partly, and its sums need shuffles.
+/// `each(hidden, outputs)` is called for every row in order. It runs [`hidden_layers`] and
+/// [`output_layer`] themselves on lanes, with every parameter in all eight, so a row's values
+/// are those of the one-row pass to the bit. One row at a time, the 20 and 10 units of a layer
+/// fill the tanh's eight lanes only partly, and the sums need shuffles.
 pub fn forward_rows(p: &[f32], rows: &[[f32; INPUTS]], mut each: impl FnMut(&Hidden<f32>, &[f32; OUTPUTS])) {
     use wide::f32x8 as F8;
-    let weight = |i: usize| F8::splat(p[i]);
+    let lanes: Vec<F8> = p.iter().map(|&v| F8::splat(v)).collect();
     for batch in rows.chunks(8) {
         // Lanes past the last row compute on zeros and are dropped.
         let x: [F8; INPUTS] =
             std::array::from_fn(|i| F8::new(std::array::from_fn(|r| batch.get(r).map_or(0.0, |x| x[i]))));
-        let mut h1: [F8; HIDDEN1] = std::array::from_fn(|j| weight(B1 + j));
-        for (i, &x) in x.iter().enumerate() {
-            for (j, s) in h1.iter_mut().enumerate() {
-                *s += weight(W1 + j * INPUTS + i) * x;
-            }
-        }
-        let h1 = h1.map(F8::tanh);
-        let mut h2: [F8; HIDDEN2] = std::array::from_fn(|k| weight(B2 + k));
-        for (j, &h) in h1.iter().enumerate() {
-            for (k, s) in h2.iter_mut().enumerate() {
-                *s += weight(W2 + k * HIDDEN1 + j) * h;
-            }
-        }
-        let h2 = h2.map(F8::tanh);
-        let y: [F8; OUTPUTS] = std::array::from_fn(|c| {
-            let mut s = weight(B3 + c);
-            for (k, &h) in h2.iter().enumerate() {
-                s += weight(W3 + c * HIDDEN2 + k) * h;
-            }
-            s
-        });
+        let (h1, h2) = hidden_layers(&lanes, &x);
+        let y = output_layer(&lanes, &h2);
         let (h1, h2, y) = (h1.map(F8::to_array), h2.map(F8::to_array), y.map(F8::to_array));
         for r in 0..batch.len() {
             each(&(h1.map(|h| h[r]), h2.map(|h| h[r])), &y.map(|y| y[r]));
@@ -218,8 +211,8 @@ pub fn forward(p: &[f32], x: &[f32; INPUTS]) -> [f32; OUTPUTS] {
 }
 
 /// The linear output layer on the second tanh layer's activations `h2`.
-pub fn output_layer(p: &[f32], h2: &[f32; HIDDEN2]) -> [f32; OUTPUTS] {
-    let mut y = [0.0f32; OUTPUTS];
+pub fn output_layer<T: Real>(p: &[T], h2: &[T; HIDDEN2]) -> [T; OUTPUTS] {
+    let mut y = [T::ZERO; OUTPUTS];
     for c in 0..OUTPUTS {
         let mut s = p[B3 + c];
         for k in 0..HIDDEN2 {
