@@ -303,26 +303,26 @@ fn validation_flags(settings: &BakeSettings, keys: impl Iterator<Item = u64>) ->
 pub fn targets_read(scene: &Scene, settings: &BakeSettings, object: u32, samples: &[&Sample]) -> Vec<bool> {
     let mut read = vec![false; samples.len()];
     let bounds = scene.objects[object as usize].bounds();
-    // Each sample's key, hashed once for the subsets of every node.
-    let keys: Vec<u64> = samples.iter().map(|s| key(settings, s)).collect();
+    let samples = keyed(settings, samples);
     let all: Vec<usize> = (0..samples.len()).collect();
     let mut nodes = vec![(Node::root(scene, object), all)];
     while let Some((node, within)) = nodes.pop() {
-        for i in lowest_keys(settings, within.iter().map(|&i| keys[i])) {
+        for i in lowest_keys(settings, within.iter().map(|&i| samples[i].key)) {
             read[within[i]] = true;
         }
         if !node.region.is_whole() && settings.blend_band > 0.0 {
             // `fit_blend`'s samples: those of the whole object inside the leaf's blend box.
             let blend = node.region.blend_box(bounds.min, bounds.max, settings.blend_band);
-            let near: Vec<usize> = (0..samples.len()).filter(|&i| blend.weight(position(samples[i])) > 0.0).collect();
-            for i in lowest_keys(settings, near.iter().map(|&i| keys[i])) {
+            let near: Vec<usize> = (0..samples.len()).filter(|&i| blend.weight(position(&samples[i])) > 0.0).collect();
+            for i in lowest_keys(settings, near.iter().map(|&i| samples[i].key)) {
                 read[near[i]] = true;
             }
         }
         if (node.region.0.len() as u32) < settings.split_depth {
             let halves = node.children().map(|child| {
                 let b = child.sample_box();
-                let inside: Vec<usize> = within.iter().copied().filter(|&i| b.contains(position(samples[i]))).collect();
+                let inside: Vec<usize> =
+                    within.iter().copied().filter(|&i| b.contains(position(&samples[i]))).collect();
                 (child, inside)
             });
             if halves.iter().all(|(_, inside)| inside.len() >= settings.min_samples) {
