@@ -42,9 +42,9 @@ pub fn write_image(path: &Path, width: u32, height: u32, pixels: &[Vec3], exposu
 fn write_kind(kind: ImageKind, path: &Path, width: u32, height: u32, pixels: &[Vec3], exposure: f32) -> Result<()> {
     match kind {
         ImageKind::Exr => {
-            use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, WritableImage};
-            let channels = SpecificChannels::rgb(|exr::prelude::Vec2(x, y): exr::prelude::Vec2<usize>| {
-                let p: Vec3 = pixels[y * width as usize + x];
+            use exr::prelude::{Encoding, Image, LineOrder, SpecificChannels, Vec2, WritableImage};
+            let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+                let p = pixels[y * width as usize + x];
                 (p.x, p.y, p.z)
             });
             // Chunks in a fixed order: compressed in parallel with no order asked for, they
