@@ -37,7 +37,7 @@ use glam::Vec3;
 use samples::{latin_hypercube, sample_rays, Aim, Sample, SurfacePoints, SAMPLE_BYTES};
 use serde::Deserialize;
 use train::train_tree;
-pub use train::{network_data, NetworkData};
+pub use train::{network_data, NetworkData, PATIENCE};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]

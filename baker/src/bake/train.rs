@@ -396,7 +396,7 @@ fn trained_on(network: &mut Network, info: &mut NetworkInfo, result: lm::LmResul
 }
 
 /// A network's training stops after this many iterations without a better validation error.
-const PATIENCE: u32 = 10;
+pub const PATIENCE: u32 = 10;
 
 /// The leaves under `node`, whose network is `trained`: the node itself, or its two halves,
 /// each grown in turn. A node is split while the tree may grow, its network's error is above
