@@ -153,12 +153,15 @@ fn main() {
     // Run to a fixed count, not stopped by a patience rule: the question is how soon LM gets
     // there. Its validation error can rise for a while and then fall lower than before, so
     // the bake's stopping rule is run as well, to show where it would have stopped.
-    let lm_result = lm::train(
-        &data.train,
-        &data.validation,
-        initial.clone(),
-        &LmSettings { max_iterations: LM_ITERATIONS, patience: LM_ITERATIONS },
-    );
+    let lm_with_patience = |patience| {
+        lm::train(
+            &data.train,
+            &data.validation,
+            initial.clone(),
+            &LmSettings { max_iterations: LM_ITERATIONS, patience },
+        )
+    };
+    let lm_result = lm_with_patience(LM_ITERATIONS);
     println!("\nLevenberg–Marquardt: validation MSE against time");
     for (t, e) in &lm_result.history {
         println!("  {t:>6.1} s  {e:.3e}");
@@ -174,12 +177,7 @@ fn main() {
         }
         None => println!("LM never reached Adam's {adam_seconds:.0}-second error"),
     }
-    let stopped = lm::train(
-        &data.train,
-        &data.validation,
-        initial,
-        &LmSettings { max_iterations: LM_ITERATIONS, patience: bake::PATIENCE },
-    );
+    let stopped = lm_with_patience(bake::PATIENCE);
     let at = stopped.history.last().map_or(0.0, |h| h.0);
     println!(
         "With a bake's stopping rule (patience {}), LM stops after {} iterations ({at:.1} s) at best {:.3e}",

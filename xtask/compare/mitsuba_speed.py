@@ -21,8 +21,6 @@ import numpy as np
 
 from mitsuba_cornell import mitsuba_scene
 
-PATHS = 256 * 256 * 256
-
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -31,16 +29,19 @@ def main():
     args = parser.parse_args()
     mi.set_variant(args.variant)
     with tempfile.TemporaryDirectory() as tmp:
-        scene = mi.load_dict(mitsuba_scene(tmp))
+        description = mitsuba_scene(tmp)
+        scene = mi.load_dict(description)
+    sensor = description["sensor"]
+    paths = sensor["film"]["width"] * sensor["film"]["height"] * sensor["sampler"]["sample_count"]
     for run in range(args.runs + 1):
         start = time.perf_counter()
-        image = mi.render(scene, spp=256, seed=run)
+        image = mi.render(scene, seed=run)
         dr.eval(image)
         dr.sync_thread()
         seconds = time.perf_counter() - start
         mean = np.round(np.array(image).mean(axis=(0, 1)), 4)
         label = "first (with compilation)" if run == 0 else f"run {run}"
-        print(f"{args.variant} {label}: {seconds:.2f} s, {PATHS / seconds / 1e6:.2f} M paths/s (image mean {mean})")
+        print(f"{args.variant} {label}: {seconds:.2f} s, {paths / seconds / 1e6:.2f} M paths/s (image mean {mean})")
 
 
 if __name__ == "__main__":
